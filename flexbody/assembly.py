@@ -1,0 +1,298 @@
+"""Assembly of a shell body with its constraints and loads into the system the integrators solve.
+
+Data flow: mesh -> ShellBody -> Model (this module) -> integrators. Everything is assembled per node as
+[u (3), theta (3)] in the nodal local frames (6 per node). Then
+
+1. nodes whose translations are constrained in fixed directions get the basis change
+   delta u_I = R_I^T E_I delta v_I (rows and columns), plus the term -E_I^T R_I hat(r_u,I) that the turning
+   frame adds to the rotation columns of those rows;
+2. the drilling component (theta_3) and the constrained components are dropped.
+
+The result is the residual r(q, lambda) = f_int(q) - lambda f_ext(q) on the free DoFs and its tangent on
+the group (columns: the derivative along R_I exp(eps e_k) and along the translation directions).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from flexbody.body import ShellBody, ShellState, update_state
+from flexbody.constraints import Fix, Symmetry, basis_with_first
+from flexbody.frames import align_frame
+from flexbody.loads import FollowerPressure, NodalLoad, pressure_contribution
+
+_COMPONENT = {"x": 0, "y": 1, "z": 2}
+
+
+def hat_many(v: np.ndarray) -> np.ndarray:
+    """hat() of each row of v (k, 3) -> (k, 3, 3)."""
+    out = np.zeros(v.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
+class ModelError(ValueError):
+    """A model that cannot be solved as given (bad constraint, load on a constrained DoF, ...)."""
+
+
+@dataclass
+class Counters:
+    """What the solution cost: element evaluations and assemblies."""
+
+    residuals: int = 0
+    tangents: int = 0
+
+
+@dataclass
+class Model:
+    """A shell body with constraints and loads.
+
+    Parameters
+    ----------
+    body : the shell body
+    constraints : Fix and Symmetry conditions
+    loads : NodalLoad and FollowerPressure loads (all scaled by the load factor)
+    """
+
+    body: ShellBody
+    constraints: list = field(default_factory=list)
+    loads: list = field(default_factory=list)
+    counters: Counters = field(default_factory=Counters)
+
+    def __post_init__(self) -> None:
+        n = self.body.n_nodes
+        self.fixed = np.zeros((n, 6), dtype=bool)
+        self.fixed[:, 5] = True  # no drilling DoF
+        self.basis = np.tile(np.eye(3), (n, 1, 1))
+        self.has_basis = np.zeros(n, dtype=bool)
+        self._apply_constraints()
+        self.free = np.flatnonzero(~self.fixed.ravel())
+        self._collect_loads()
+        conn = self.body.mesh.elements
+        self._dof6 = (6 * conn[:, :, None] + np.arange(6)).reshape(len(conn), 36)
+        size = float(np.ptp(self.body.mesh.nodes, axis=0).max()) or 1.0
+        scale6 = np.tile([size, size, size, 1.0, 1.0, 1.0], n)
+        self.dof_scale = scale6[self.free]  # translations in units of the model size, rotations in rad
+        self._rows = np.repeat(self._dof6, 36, axis=1).ravel()
+        self._cols = np.tile(self._dof6, (1, 36)).ravel()
+
+    # -- setup -------------------------------------------------------------------------------------------
+    def _check_nodes(self, nodes: np.ndarray, what: str) -> None:
+        n = self.body.n_nodes
+        if nodes.size == 0:
+            raise ModelError(f"{what} acts on no nodes")
+        if nodes.min() < 0 or nodes.max() >= n:
+            bad = nodes[(nodes < 0) | (nodes >= n)][0]
+            raise ModelError(f"{what} names node {bad}, but the mesh has nodes 0..{n - 1}")
+
+    def _apply_constraints(self) -> None:
+        frames = self.body.frames0.copy()
+        changed = False
+        for c in self.constraints:
+            if isinstance(c, Symmetry):
+                self._check_nodes(c.nodes, "symmetry condition")
+                for i in c.nodes:
+                    frames[i], k = align_frame(frames[i], c.normal, int(i))
+                    changed = True
+                    self._fix_direction(int(i), c.normal)
+                    self.fixed[i, 3 + (1 - k)] = True
+            elif isinstance(c, Fix):
+                self._check_nodes(c.nodes, "fixed condition")
+                comps = c.expanded()
+                trans = sorted(_COMPONENT[a] for a in comps if a in _COMPONENT)
+                for i in c.nodes:
+                    if len(trans) == 3:
+                        self.fixed[i, :3] = True
+                    for a in trans if len(trans) < 3 else ():
+                        self._fix_direction(int(i), np.eye(3)[a])
+                    self.fixed[i, 3] |= "r1" in comps
+                    self.fixed[i, 4] |= "r2" in comps
+            else:
+                raise ModelError(f"unknown constraint type {type(c).__name__}")
+        if changed:
+            self.body.set_reference_frames(np.arange(self.body.n_nodes), frames)
+
+    def _fix_direction(self, i: int, direction: np.ndarray) -> None:
+        """Fix the translation of node i along a direction, with a fixed translation basis."""
+        if self.fixed[i, :3].all():
+            return
+        if not self.has_basis[i]:
+            self.basis[i] = np.eye(3) if np.isclose(np.abs(direction).max(), 1.0) else basis_with_first(direction)
+            self.has_basis[i] = True
+        cos = self.basis[i].T @ direction
+        k = int(np.argmax(np.abs(cos)))
+        if abs(abs(cos[k]) - 1.0) > 1e-10:
+            raise ModelError(f"node {i}: constraint direction {direction.tolist()} contradicts an earlier "
+                             f"constraint direction on the same node (not orthogonal to it)")
+        self.fixed[i, k] = True
+
+    def _collect_loads(self) -> None:
+        n = self.body.n_nodes
+        self.dead = np.zeros((n, 6))      # global force, moment
+        self.follower = np.zeros((n, 6))  # local force, moment
+        self.pressures: list[FollowerPressure] = []
+        for load in self.loads:
+            if isinstance(load, NodalLoad):
+                self._check_nodes(load.nodes, "load")
+                target = self.follower if load.follower else self.dead
+                np.add.at(target, load.nodes, np.concatenate([load.force, load.moment]))
+            elif isinstance(load, FollowerPressure):
+                if not np.isfinite(load.pressure):
+                    raise ModelError(f"pressure must be finite, got {load.pressure!r}")
+                self.pressures.append(load)
+            else:
+                raise ModelError(f"unknown load type {type(load).__name__}")
+        self._check_loads_on_constrained()
+
+    def _check_loads_on_constrained(self) -> None:
+        frames = self.body.frames0
+        for i in np.flatnonzero(np.any(self.dead != 0, axis=1) | np.any(self.follower != 0, axis=1)):
+            force = self.dead[i, :3] + frames[i] @ self.follower[i, :3]
+            moment = self.dead[i, 3:] + frames[i] @ self.follower[i, 3:]
+            trans = (self.basis[i] if self.has_basis[i] else frames[i]).T @ force
+            rot = frames[i].T @ moment
+            scale = max(np.abs(force).max(), np.abs(moment).max())
+            for k, name in enumerate(("translation 1", "translation 2", "translation 3")):
+                if self.fixed[i, k] and abs(trans[k]) > 1e-12 * scale:
+                    raise ModelError(f"load on node {i} acts on its constrained {name} "
+                                     f"(component {trans[k]:.6g}): remove the load or the constraint")
+            for k in (0, 1):
+                if self.fixed[i, 3 + k] and abs(rot[k]) > 1e-12 * scale:
+                    raise ModelError(f"moment on node {i} acts on its constrained rotation r{k + 1} "
+                                     f"(component {rot[k]:.6g}): remove the load or the constraint")
+
+    # -- sizes -------------------------------------------------------------------------------------------
+    @property
+    def n_dof(self) -> int:
+        return int(self.free.size)
+
+    def initial_state(self) -> ShellState:
+        return self.body.initial_state()
+
+    # -- evaluation --------------------------------------------------------------------------------------
+    def _external_local(self, state: ShellState):
+        """Local external force (n, 6), its nodal tangent blocks (n, 6, 6) and pressure element blocks."""
+        R = state.frames
+        f = self.follower.copy()
+        f[:, :3] += np.einsum("nji,nj->ni", R, self.dead[:, :3])
+        f[:, 3:] += np.einsum("nji,nj->ni", R, self.dead[:, 3:])
+        blocks = np.zeros((len(R), 6, 6))   # d f_ext / d h (local), nodal
+        Fl = np.einsum("nji,nj->ni", R, self.dead[:, :3])
+        Ml = np.einsum("nji,nj->ni", R, self.dead[:, 3:])
+        blocks[:, :3, 3:] = hat_many(Fl)
+        blocks[:, 3:, 3:] = hat_many(Ml)
+        press = []
+        for p in self.pressures:
+            F, dF, elems = pressure_contribution(self.body.mesh, state.x, p.pressure, p.elements)
+            Fl = np.einsum("nji,nj->ni", R, F)
+            f[:, :3] += Fl
+            blocks[:, :3, 3:] += hat_many(Fl)
+            conn = self.body.mesh.elements[elems]
+            Rc = R[conn]                                        # (k, 6, 3, 3)
+            local = np.einsum("kiba,kijbc,kjcd->kijad", Rc, dF, Rc)  # R_I^T dF_IJ R_J
+            press.append((conn, local))
+        return f, blocks, press
+
+    def _row_maps(self, state: ShellState) -> np.ndarray:
+        """S_I (n, 3, 3): translational equations are the force components S_I r_u,I.
+
+        S_I = R_I (global force components) or E_I^T R_I for nodes with a fixed translation basis.
+        The increments stay local (delta x_I = R_I delta u_I) except on basis nodes (delta x_I = E_I delta v_I).
+        Writing the force balance in fixed directions keeps the term hat(r_u) -- the derivative of a local
+        force component under a turning frame, large far from equilibrium -- out of the iteration matrix:
+        Newton then takes the steps of a global-frame Newton, and still solves the same equations.
+        """
+        S = state.frames.copy()
+        idx = np.flatnonzero(self.has_basis)
+        S[idx] = np.einsum("nji,njk->nik", self.basis[idx], state.frames[idx])
+        return S
+
+    def residual(self, state: ShellState, lam: float) -> np.ndarray:
+        """r(q, lambda) on the free DoFs."""
+        r6 = self._residual6(state, lam, want_tangent=False)[0]
+        return self._rotate_rows(state, r6).ravel()[self.free]
+
+    def _residual6(self, state: ShellState, lam: float, want_tangent: bool):
+        self._check_finite(state)
+        fe, Ke = self.body.element_forces(state, want_tangent)
+        self.counters.residuals += 1
+        n = self.body.n_nodes
+        r6 = np.zeros(6 * n)
+        np.add.at(r6, self._dof6, fe)
+        fext, ext_blocks, press = self._external_local(state)
+        r6 = r6.reshape(n, 6) - lam * fext
+        return r6, Ke, ext_blocks, press
+
+    def _rotate_rows(self, state: ShellState, r6: np.ndarray) -> np.ndarray:
+        out = r6.copy()
+        out[:, :3] = np.einsum("nij,nj->ni", self._row_maps(state), r6[:, :3])
+        return out
+
+    def residual_and_tangent(self, state: ShellState, lam: float):
+        """r (free,) and the tangent K = dr/dq (free x free, CSC) at the state."""
+        r6, Ke, ext_blocks, press = self._residual6(state, lam, want_tangent=True)
+        self.counters.tangents += 1
+        n = self.body.n_nodes
+        rows, cols, vals = [self._rows], [self._cols], [Ke.ravel()]
+        nd = (6 * np.arange(n)[:, None] + np.arange(6)).reshape(n, 6)
+        rows.append(np.repeat(nd, 6, axis=1).ravel())
+        cols.append(np.tile(nd, (1, 6)).ravel())
+        vals.append((-lam * ext_blocks).ravel())
+        for conn, local in press:
+            d = (6 * conn[:, :, None] + np.arange(3)).reshape(len(conn), 18)
+            rows.append(np.repeat(d, 18, axis=1).ravel())
+            cols.append(np.tile(d, (1, 18)).ravel())
+            vals.append((-lam * local.transpose(0, 1, 3, 2, 4).reshape(len(conn), 18, 18)).ravel())
+        K6 = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                           shape=(6 * n, 6 * n))
+        S = self._row_maps(state)
+        row_blocks = np.tile(np.eye(6), (n, 1, 1))
+        row_blocks[:, :3, :3] = S
+        col_blocks = np.tile(np.eye(6), (n, 1, 1))
+        idx = np.flatnonzero(self.has_basis)
+        col_blocks[idx, :3, :3] = np.transpose(S[idx], (0, 2, 1))
+        K6 = sp.block_diag(row_blocks, format="csr") @ K6 @ sp.block_diag(col_blocks, format="csr")
+        # the turning frame: d(S_I r_u,I)/d theta_I = S_I (K_u theta - hat(r_u,I))
+        corr = -np.einsum("nij,njk->nik", S, hat_many(r6[:, :3]))
+        rr = (6 * np.arange(n)[:, None, None] + np.arange(3)[None, :, None]).repeat(3, axis=2)
+        cc = (6 * np.arange(n)[:, None, None] + 3 + np.arange(3)[None, None, :]).repeat(3, axis=1)
+        K6 = K6 + sp.csr_matrix((corr.ravel(), (rr.ravel(), cc.ravel())), shape=K6.shape)
+        r = self._rotate_rows(state, r6).ravel()[self.free]
+        K = K6[self.free][:, self.free].tocsc()
+        return r, K
+
+    def external_force(self, state: ShellState) -> np.ndarray:
+        """f_ext(q) on the free DoFs (the residual is f_int - lambda f_ext)."""
+        fext = self._external_local(state)[0]
+        return self._rotate_rows(state, fext).ravel()[self.free]
+
+    def conjugate(self, state: ShellState, dq: np.ndarray) -> np.ndarray:
+        """The increment in the components that pair with the residual by virtual work: w . r = dW."""
+        n = self.body.n_nodes
+        d6 = np.zeros(6 * n)
+        d6[self.free] = dq
+        d6 = d6.reshape(n, 6)
+        idx = np.flatnonzero(~self.has_basis)
+        d6[idx, :3] = np.einsum("nij,nj->ni", state.frames[idx], d6[idx, :3])
+        return d6.ravel()[self.free]
+
+    def update(self, state: ShellState, dq: np.ndarray) -> ShellState:
+        """q <- q o exp(dq): the 5-DoF nodal update."""
+        n = self.body.n_nodes
+        d6 = np.zeros(6 * n)
+        d6[self.free] = dq
+        d6 = d6.reshape(n, 6)
+        du = d6[:, :3].copy()
+        idx = np.flatnonzero(self.has_basis)
+        du[idx] = np.einsum("nij,nj->ni", self.basis[idx], d6[idx, :3])
+        return update_state(state, du, d6[:, 3:5], self.has_basis)
+
+    @staticmethod
+    def _check_finite(state: ShellState) -> None:
+        if not (np.all(np.isfinite(state.x)) and np.all(np.isfinite(state.frames))):
+            raise FloatingPointError("non-finite nodal positions or frames in the state")

@@ -1,0 +1,156 @@
+"""The flexible shell body: mesh + material + reference geometry + nodal states on SE(3).
+
+A ``ShellBody`` evaluates the element internal forces and tangents in the nodal local frames
+(per node [u (3), theta (3)], drilling component included); the assembly decides which DoFs are solved.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexbody.frames import frames_from_directors
+from flexbody.lie import so3
+from flexbody.mesh import Tri6Mesh
+from flexbody.shell.element_reference import assumed_strain_maps
+from flexbody.shell.geometry import N_GAUSS, element_geometry
+from flexbody.shell.material import ShellMaterial
+from flexbody.shell.mitc6 import N_TYING
+
+
+@dataclass
+class ShellState:
+    """Nodal configuration: positions x_I (n, 3) and frames R_I (n, 3, 3); director t_I = R_I e3."""
+
+    x: np.ndarray
+    frames: np.ndarray
+
+    def copy(self) -> "ShellState":
+        return ShellState(self.x.copy(), self.frames.copy())
+
+    @property
+    def directors(self) -> np.ndarray:
+        return self.frames[:, :, 2]
+
+
+@dataclass
+class ReferenceGeometry:
+    """Per-element reference data, stacked over the elements."""
+
+    e_ref: np.ndarray      # (m, 17, 8)
+    to_cart: np.ndarray    # (m, 7, 8, 8)
+    weights: np.ndarray    # (m, 7)
+
+
+def build_reference(mesh: Tri6Mesh, frames0: np.ndarray) -> ReferenceGeometry:
+    m = mesh.n_elements
+    e_ref = np.zeros((m, N_TYING + N_GAUSS, 8))
+    to_cart = np.zeros((m, N_GAUSS, 8, 8))
+    weights = np.zeros((m, N_GAUSS))
+    for e, conn in enumerate(mesh.elements):
+        g = element_geometry(mesh.nodes[conn], frames0[conn])
+        e_ref[e], to_cart[e], weights[e] = g.e_ref, g.to_cart, g.weights
+    return ReferenceGeometry(e_ref, to_cart, weights)
+
+
+@dataclass
+class ShellBody:
+    """A shell body.
+
+    Parameters
+    ----------
+    mesh : the six-node triangle mesh (reference configuration)
+    material : section properties
+    tying : MITC6 assumed strains (True) or plain displacement-based strains (False, locks)
+    frame_axis : axis projected onto the tangent planes to orient the nodal frames (default: automatic)
+    kernel : "numba" (fast) or "reference" (the readable numpy element)
+    """
+
+    mesh: Tri6Mesh
+    material: ShellMaterial
+    tying: bool = True
+    frame_axis: np.ndarray | None = None
+    kernel: str = "numba"
+    frames0: np.ndarray = field(init=False)
+    reference: ReferenceGeometry = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.mesh, Tri6Mesh):
+            raise TypeError(f"mesh must be a Tri6Mesh, got {type(self.mesh).__name__}")
+        if not isinstance(self.material, ShellMaterial):
+            raise TypeError(f"material must be a ShellMaterial, got {type(self.material).__name__}")
+        if self.kernel not in ("numba", "reference"):
+            raise ValueError(f"kernel must be 'numba' or 'reference', got {self.kernel!r}")
+        self.frames0 = frames_from_directors(self.mesh.directors, self.frame_axis)
+        self.reference = build_reference(self.mesh, self.frames0)
+        self._maps = assumed_strain_maps(self.tying)
+
+    def set_reference_frames(self, nodes: np.ndarray, frames: np.ndarray) -> None:
+        """Override reference frames of some nodes (e.g. to align with a symmetry plane) and rebuild."""
+        self.frames0 = self.frames0.copy()
+        self.frames0[nodes] = frames
+        self.reference = build_reference(self.mesh, self.frames0)
+
+    # -- state -------------------------------------------------------------------------------------------
+    def initial_state(self) -> ShellState:
+        return ShellState(self.mesh.nodes.astype(float).copy(), self.frames0.copy())
+
+    @property
+    def n_nodes(self) -> int:
+        return self.mesh.n_nodes
+
+    # -- element evaluation -------------------------------------------------------------------------------
+    def element_forces(self, state: ShellState, want_tangent: bool = True):
+        """Element internal forces (m, 36) and tangents (m, 36, 36) in the nodal local frames."""
+        conn = self.mesh.elements
+        x_el = state.x[conn]
+        fr_el = state.frames[conn]
+        C = self.material.section()
+        ref = self.reference
+        if self.kernel == "numba":
+            from flexbody.shell.element import internal_force_tangent_batch
+            return internal_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C,
+                                                self._maps, want_tangent)
+        from flexbody.shell.element_reference import internal_force_tangent
+        from flexbody.shell.geometry import ElementGeometry
+        m = len(conn)
+        f = np.zeros((m, 36))
+        K = np.zeros((m, 36, 36)) if want_tangent else None
+        for e in range(m):
+            geom = ElementGeometry(ref.e_ref[e], ref.to_cart[e], ref.weights[e])
+            fe, Ke = internal_force_tangent(x_el[e], fr_el[e], geom, C, self.tying)
+            f[e] = fe
+            if want_tangent:
+                K[e] = Ke
+        return f, K
+
+    def strain_energy(self, state: ShellState) -> float:
+        from flexbody.shell.element_reference import strain_energy
+        from flexbody.shell.geometry import ElementGeometry
+        C = self.material.section()
+        ref = self.reference
+        total = 0.0
+        for e, conn in enumerate(self.mesh.elements):
+            geom = ElementGeometry(ref.e_ref[e], ref.to_cart[e], ref.weights[e])
+            total += strain_energy(state.x[conn], state.frames[conn], geom, C, self.tying)
+        return total
+
+
+def update_state(state: ShellState, du: np.ndarray, dtheta: np.ndarray,
+                 global_translation: np.ndarray | None = None) -> ShellState:
+    """The 5-DoF nodal update: x_I += R_I du_I (or du_I itself where global), R_I <- R_I exp(th1 e1 + th2 e2).
+
+    du : (n, 3) translation increments (local, or global where ``global_translation``)
+    dtheta : (n, 2) in-plane rotation increments
+    """
+    new = state.copy()
+    dx = np.einsum("nij,nj->ni", state.frames, du)
+    if global_translation is not None:
+        dx[global_translation] = du[global_translation]
+    new.x += dx
+    rot = np.zeros((len(du), 3))
+    rot[:, :2] = dtheta
+    for i in np.flatnonzero(np.any(dtheta != 0.0, axis=1)):
+        new.frames[i] = state.frames[i] @ so3.exp(rot[i])
+    return new

@@ -1,0 +1,78 @@
+"""Boundary conditions of 5-DoF shell nodes.
+
+Each node solves five components: three translations and the two in-plane rotations theta_1, theta_2
+about the frame axes t1, t2 (no drilling). Translations are local to the nodal frame (the SE(3) local frame,
+which keeps the tangent invariant) unless a constraint needs components in fixed directions: such a node
+gets a fixed translation basis E_I (columns = directions) and solves delta x_I = E_I delta v_I.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+_AXES = {"x": 0, "y": 1, "z": 2}
+_VALID = {"x", "y", "z", "r1", "r2", "all", "translations", "rotations"}
+
+
+@dataclass(frozen=True)
+class Fix:
+    """Fix components of the listed nodes.
+
+    components : any of "x", "y", "z" (global translations), "r1", "r2" (rotations about the nodal
+    in-plane axes t1, t2), or the shorthands "all" (clamped), "translations", "rotations".
+    """
+
+    nodes: np.ndarray
+    components: tuple[str, ...] = ("all",)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "nodes", np.atleast_1d(np.asarray(self.nodes, dtype=int)))
+        comps = (self.components,) if isinstance(self.components, str) else tuple(self.components)
+        bad = [c for c in comps if c not in _VALID]
+        if bad:
+            raise ValueError(f"unknown constraint component(s) {bad}; use any of {sorted(_VALID)}")
+        object.__setattr__(self, "components", comps)
+
+    def expanded(self) -> set[str]:
+        out: set[str] = set()
+        for c in self.components:
+            if c == "all":
+                out |= {"x", "y", "z", "r1", "r2"}
+            elif c == "translations":
+                out |= {"x", "y", "z"}
+            elif c == "rotations":
+                out |= {"r1", "r2"}
+            else:
+                out.add(c)
+        return out
+
+
+@dataclass(frozen=True)
+class Symmetry:
+    """Symmetry plane with unit normal ``normal`` through the listed nodes.
+
+    The translation along the normal is zero, and so is the rotation about the in-plane axis that lies in
+    the plane. The nodal frame is turned about the director (if needed) so that one in-plane axis is the
+    plane normal; the rotation about the other in-plane axis is then the fixed one, for any deformation.
+    """
+
+    nodes: np.ndarray
+    normal: np.ndarray
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "nodes", np.atleast_1d(np.asarray(self.nodes, dtype=int)))
+        n = np.asarray(self.normal, dtype=float)
+        if n.shape != (3,) or not np.all(np.isfinite(n)) or np.linalg.norm(n) == 0:
+            raise ValueError(f"symmetry normal must be a nonzero finite 3-vector, got {self.normal!r}")
+        object.__setattr__(self, "normal", n / np.linalg.norm(n))
+
+
+def basis_with_first(direction: np.ndarray) -> np.ndarray:
+    """An orthonormal basis (columns) whose first vector is ``direction``."""
+    d = direction / np.linalg.norm(direction)
+    helper = np.eye(3)[int(np.argmin(np.abs(d)))]
+    b = np.cross(d, helper)
+    b /= np.linalg.norm(b)
+    return np.column_stack([d, b, np.cross(d, b)])

@@ -1,0 +1,52 @@
+"""Nodal reference frames R_I = [t1, t2, n] of a shell from its directors.
+
+The nodal frames carry no drilling DoF, but their in-plane orientation enters the relative-rotation
+interpolation, so the field t1 must be smooth: t1 is a fixed axis projected onto the tangent plane.
+The default axis is the global axis least aligned with any director.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def default_frame_axis(directors: np.ndarray) -> np.ndarray:
+    """The global axis (x, y or z) whose largest |cos| with the directors is smallest."""
+    worst = np.abs(directors).max(axis=0)
+    axis = np.zeros(3)
+    axis[int(np.argmin(worst))] = 1.0
+    return axis
+
+
+def frames_from_directors(directors: np.ndarray, axis: np.ndarray | None = None) -> np.ndarray:
+    """Frames (n, 3, 3) with third column the director and first column the projected ``axis``."""
+    directors = np.asarray(directors, dtype=float)
+    axis = default_frame_axis(directors) if axis is None else np.asarray(axis, dtype=float)
+    axis = axis / np.linalg.norm(axis)
+    t1 = axis - (directors @ axis)[:, None] * directors
+    norm = np.linalg.norm(t1, axis=1)
+    if np.any(norm < 1e-6):
+        bad = int(np.argmin(norm))
+        raise ValueError(f"frame axis {axis.tolist()} is parallel to the director of node {bad}; "
+                         "choose another frame_axis")
+    t1 /= norm[:, None]
+    t2 = np.cross(directors, t1)
+    return np.stack([t1, t2, directors], axis=2)
+
+
+def align_frame(frame: np.ndarray, direction: np.ndarray, node: int) -> tuple[np.ndarray, int]:
+    """Rotate a frame about its director so that one in-plane axis is +-``direction``.
+
+    Returns the new frame and the index (0 or 1) of the in-plane axis now along ``direction``.
+    An axis already within 1e-8 of the direction is kept, so frames stay unchanged where they fit.
+    """
+    n = frame[:, 2]
+    direction = np.asarray(direction, float) / np.linalg.norm(direction)
+    if abs(direction @ n) > 1e-6:
+        raise ValueError(f"symmetry plane normal {direction.tolist()} is not tangent to the shell at node "
+                         f"{node} (director {n.tolist()}): the node cannot lie on that symmetry plane")
+    for k in (0, 1):
+        if abs(abs(frame[:, k] @ direction) - 1.0) < 1e-8:
+            return frame, k
+    t1 = direction
+    return np.column_stack([t1, np.cross(n, t1), n]), 0

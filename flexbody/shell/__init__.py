@@ -1,0 +1,1 @@
+"""The six-node SE(3) shell element: geometry, kinematics, MITC6 tying, material, element kernels."""

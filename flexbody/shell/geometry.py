@@ -1,0 +1,75 @@
+"""Reference geometry of one element: evaluation points, metric, covariant-to-Cartesian maps, f^0.
+
+The covariant strains of the kinematics are referred to the parametric directions (r, s). The material
+law needs them in a local Cartesian basis (t1, t2) of the reference surface at each Gauss point:
+t1 = G_r/|G_r|, n = G_r x G_s/|G_r x G_s|, t2 = n x t1, with G_a = X^0_,a. With J_ia = G_i . t_a and
+P = J^-1, a tensor strain transforms as eps_ab = P_ai P_bj e_ij and a transverse shear as gamma_a = P_ai g_i.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexbody.shell import mitc6
+from flexbody.shell.kinematics import covariant_strains, point_kinematics, relative_rotations
+from flexbody.shell.shape import gauss_triangle_7, shape_derivatives, shape_functions
+
+GAUSS_POINTS, GAUSS_WEIGHTS = gauss_triangle_7()
+#: Evaluation points of an element: the MITC6 tying points first, then the Gauss points.
+EVAL_POINTS = np.vstack([mitc6.TYING_POINTS, GAUSS_POINTS])
+N_GAUSS = len(GAUSS_POINTS)
+GAUSS_OFFSET = mitc6.N_TYING
+EVAL_N = np.array([shape_functions(r, s) for r, s in EVAL_POINTS])
+EVAL_DN = np.array([shape_derivatives(r, s) for r, s in EVAL_POINTS])
+MEMBRANE_MAPS = np.array([mitc6.membrane_map(r, s) for r, s in GAUSS_POINTS])  # (7, 3, 10, 3)
+SHEAR_MAPS = np.array([mitc6.shear_map(r, s) for r, s in GAUSS_POINTS])        # (7, 2, 10, 2)
+
+
+def tensor_to_voigt(P: np.ndarray) -> np.ndarray:
+    """L with [eps_11, eps_22, 2 eps_12] = L [e_rr, e_ss, e_rs] for eps_ab = P_ai P_bj e_ij."""
+    (p00, p01), (p10, p11) = P
+    return np.array([
+        [p00 * p00, p01 * p01, 2 * p00 * p01],
+        [p10 * p10, p11 * p11, 2 * p10 * p11],
+        [2 * p00 * p10, 2 * p01 * p11, 2 * (p00 * p11 + p01 * p10)],
+    ])
+
+
+def local_basis(G: np.ndarray) -> tuple[np.ndarray, float]:
+    """Covariant-to-Cartesian 2x2 map P and the area element |G_r x G_s| from G = (G_r, G_s)."""
+    normal = np.cross(G[0], G[1])
+    area = float(np.linalg.norm(normal))
+    n = normal / area
+    t1 = G[0] / np.linalg.norm(G[0])
+    t2 = np.cross(n, t1)
+    J = np.array([[G[0] @ t1, G[0] @ t2], [G[1] @ t1, G[1] @ t2]])
+    return np.linalg.inv(J), area
+
+
+@dataclass(frozen=True)
+class ElementGeometry:
+    """Reference data of one element (computed once from the reference configuration)."""
+
+    e_ref: np.ndarray      # (17, 8) covariant strain measures of the reference state at EVAL_POINTS
+    to_cart: np.ndarray    # (7, 8, 8) covariant -> Cartesian [membrane, bending, shear] at Gauss points
+    weights: np.ndarray    # (7,) Gauss weight x area element
+
+
+def element_geometry(x0: np.ndarray, frames0: np.ndarray) -> ElementGeometry:
+    """Reference measures f^0 (paper Eq. 8) and the metric of one element."""
+    d0 = relative_rotations(frames0)
+    e_ref = np.array([
+        covariant_strains(point_kinematics(x0, frames0, d0, N, dN).F) for N, dN in zip(EVAL_N, EVAL_DN)
+    ])
+    to_cart = np.zeros((N_GAUSS, 8, 8))
+    weights = np.zeros(N_GAUSS)
+    for g in range(N_GAUSS):
+        P, area = local_basis(EVAL_DN[GAUSS_OFFSET + g] @ x0)
+        L = tensor_to_voigt(P)
+        to_cart[g, :3, :3] = L
+        to_cart[g, 3:6, 3:6] = L
+        to_cart[g, 6:, 6:] = P
+        weights[g] = GAUSS_WEIGHTS[g] * area
+    return ElementGeometry(e_ref, to_cart, weights)

@@ -1,0 +1,185 @@
+"""Strain measures of the SE(3) shell at one point of an element, their variation and second variation.
+
+Readable numpy reference (paper Eqs. 9, 12, 30-34). Nodal state: positions x_I and frames R_I, I = 0..5.
+Virtual and incremental nodal motions are local (the local frame of SE(3), paper Eq. 4-5):
+
+    delta x_I = R_I delta u_I,      delta R_I = R_I hat(delta theta_I),
+
+ordered per node as [u (3), theta (3)], 36 components per element (the drilling component of theta is
+removed later by the body). All derivatives below are directional derivatives along these group motions,
+so the tangent they build is the one a finite difference with R exp(eps e_i) measures.
+
+Relative-rotation interpolation about the reference node r = 0 (paper Eq. 30):
+    d_I = log(R_0^T R_I),   d = sum N_I d_I,   R = R_0 exp(hat d)
+Strain measures in the parametric directions a in {r, s} (paper Eq. 9):
+    f_au = R^T x_,a,        f_aw = axial(R^T R_,a) = T(d) d_,a
+with T the right tangent operator of SO(3) (paper Eq. 10) and its variations (paper Eq. 31):
+    delta d_I = T^-1(d_I) delta theta_I - T^-1(-d_I) delta theta_0
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexbody.lie import so3
+
+NDOF = 36  # 6 nodes x [u, theta]
+E3 = np.array([0.0, 0.0, 1.0])
+HAT_E3 = so3.hat(E3)
+
+
+def relative_rotations(frames: np.ndarray) -> np.ndarray:
+    """d_I = log(R_0^T R_I) for the six nodes (paper Eq. 30); d_0 = 0."""
+    d = np.zeros((6, 3))
+    for i in range(1, 6):
+        d[i] = so3.log(frames[0].T @ frames[i])
+    return d
+
+
+@dataclass
+class PointKinematics:
+    """Everything the variations at one point need. F = [f_ru, f_su, f_rw, f_sw], shape (4, 3)."""
+
+    N: np.ndarray          # (6,) shape functions
+    dN: np.ndarray         # (2, 6) derivatives in r, s
+    frames: np.ndarray     # (6, 3, 3) nodal frames R_I
+    d_nodes: np.ndarray    # (6, 3) relative rotation vectors d_I
+    d: np.ndarray          # (3,) interpolated relative rotation
+    d_a: np.ndarray        # (2, 3) its derivatives
+    Q: np.ndarray          # exp(d)
+    T: np.ndarray          # T(d)
+    R: np.ndarray          # R_0 exp(d): the interpolated frame
+    F: np.ndarray          # (4, 3) strain measures
+    Jd: np.ndarray         # (3, 36) d(d)/d(h)
+    Jda: np.ndarray        # (2, 3, 36) d(d_,a)/d(h)
+    Jth: np.ndarray        # (3, 36) variation of the point rotation: R^T delta R = hat(Jth delta h)
+    JdI: np.ndarray        # (6, 3, 36) d(d_I)/d(h)
+
+
+def point_kinematics(x: np.ndarray, frames: np.ndarray, d_nodes: np.ndarray,
+                     N: np.ndarray, dN: np.ndarray) -> PointKinematics:
+    """Strain measures f (paper Eq. 9) and the Jacobians of the interpolated quantities."""
+    d = N @ d_nodes
+    d_a = dN @ d_nodes
+    Q = so3.exp(d)
+    T = so3.tangent(d)
+    R = frames[0] @ Q
+    x_a = dN @ x
+    F = np.array([R.T @ x_a[0], R.T @ x_a[1], T @ d_a[0], T @ d_a[1]])
+
+    # Jacobians of d_I with respect to the nodal rotations (paper Eq. 31)
+    JdI = np.zeros((6, 3, NDOF))
+    for i in range(1, 6):
+        JdI[i][:, 6 * i + 3:6 * i + 6] = so3.tangent_inv(d_nodes[i])
+        JdI[i][:, 3:6] = -so3.tangent_inv(-d_nodes[i])
+    Jd = np.einsum("i,ijk->jk", N, JdI)
+    Jda = np.einsum("ai,ijk->ajk", dN, JdI)
+    Jth = T @ Jd
+    Jth[:, 3:6] += Q.T
+    return PointKinematics(N, dN, frames, d_nodes, d, d_a, Q, T, R, F, Jd, Jda, Jth, JdI)
+
+
+def measures_jacobian(k: PointKinematics) -> np.ndarray:
+    """G = dF/dh, shape (12, 36), rows [f_ru, f_su, f_rw, f_sw] (paper Eq. 17, 32)."""
+    G = np.zeros((12, NDOF))
+    for a in range(2):
+        f_u = k.F[a]
+        rows = slice(3 * a, 3 * a + 3)
+        # delta f_au = hat(f_au) delta theta + R^T sum dN_I R_I delta u_I
+        G[rows] = so3.hat(f_u) @ k.Jth
+        for i in range(6):
+            G[rows, 6 * i:6 * i + 3] += k.dN[a, i] * (k.R.T @ k.frames[i])
+        # delta f_aw = Xi_T(d, d_,a) delta d + T(d) delta d_,a
+        G[6 + 3 * a:9 + 3 * a] = so3.d_tangent(k.d, k.d_a[a]) @ k.Jd + k.T @ k.Jda[a]
+    return G
+
+
+def second_variation(k: PointKinematics, g: np.ndarray) -> np.ndarray:
+    """Matrix H with  Delta(delta F) . g = delta h^T H Delta h  for fixed local virtual motions.
+
+    g = [a_r, a_s, b_r, b_s] (12,) weights the four strain measures. Rows of H are the virtual motion,
+    columns the increment; H is not symmetric away from equilibrium (the tangent lives on the group).
+    """
+    H = np.zeros((NDOF, NDOF))
+    G = measures_jacobian(k)
+    g_d = np.zeros(3)          # weight of Delta(delta d)
+    g_da = np.zeros((2, 3))    # weight of Delta(delta d_,a)
+    for a in range(2):
+        a_u, b_w = g[3 * a:3 * a + 3], g[6 + 3 * a:9 + 3 * a]
+        f_u = k.F[a]
+        # Delta of hat(f_u) delta theta:  delta theta^T hat(a) Delta f_u  +  (a x f_u) . Delta delta theta
+        H += k.Jth.T @ so3.hat(a_u) @ G[3 * a:3 * a + 3]
+        c = np.cross(a_u, f_u)
+        H[3:6] -= k.Q @ so3.hat(c) @ k.T @ k.Jd               # Delta(exp(d)^T) delta theta_0
+        H += k.Jd.T @ (-so3.d_tangent(-k.d, c)) @ k.Jd         # Delta(T(d)) delta d
+        g_d += k.T.T @ c                                       # T(d) Delta delta d
+        # Delta of R^T sum dN_I R_I delta u_I
+        for i in range(6):
+            ui = slice(6 * i, 6 * i + 3)
+            H[ui] -= k.dN[a, i] * (k.frames[i].T @ k.R @ so3.hat(a_u) @ k.Jth)
+            H[ui, 6 * i + 3:6 * i + 6] += k.dN[a, i] * so3.hat(k.frames[i].T @ k.R @ a_u)
+        # Delta of Xi_T(d, d_,a) delta d + T(d) delta d_,a
+        H += k.Jd.T @ so3.d2_tangent(k.d, b_w, k.d_a[a]) @ k.Jd
+        Z = -so3.d_tangent(-k.d, b_w)                         # b^T DT(d)[w] v = v^T Z w
+        H += k.Jd.T @ Z.T @ k.Jda[a] + k.Jda[a].T @ Z @ k.Jd
+        g_d += so3.d_tangent(k.d, k.d_a[a]).T @ b_w
+        g_da[a] += k.T.T @ b_w
+    # Delta delta d_I = DT^-1(d_I)[Delta d_I] delta theta_I + DT^-1(-d_I)[Delta d_I] delta theta_0
+    for i in range(1, 6):
+        e = k.N[i] * g_d + k.dN[:, i] @ g_da
+        H[6 * i + 3:6 * i + 6] -= so3.d_tangent_inv(-k.d_nodes[i], e) @ k.JdI[i]
+        H[3:6] -= so3.d_tangent_inv(k.d_nodes[i], e) @ k.JdI[i]
+    return H
+
+
+# --- covariant strains as functions of F (paper Eq. 12) -------------------------------------------------
+# e = [e_rr, e_ss, e_rs | k_rr, k_ss, k_rs | g_r, g_s]: membrane and bending as tensor components,
+# transverse shear as engineering components (g_a = 2 e_a3).
+
+def covariant_strains(F: np.ndarray) -> np.ndarray:
+    """Raw covariant strain measures of F (the reference values are subtracted by the caller)."""
+    fru, fsu, frw, fsw = F
+    return np.array([
+        0.5 * fru @ fru, 0.5 * fsu @ fsu, 0.5 * fru @ fsu,
+        -fru @ HAT_E3 @ frw, -fsu @ HAT_E3 @ fsw, -0.5 * (fru @ HAT_E3 @ fsw + fsu @ HAT_E3 @ frw),
+        fru[2], fsu[2],
+    ])
+
+
+def strain_gradient(F: np.ndarray) -> np.ndarray:
+    """D = de/dF, shape (8, 12)."""
+    fru, fsu, frw, fsw = F
+    D = np.zeros((8, 12))
+    ru, su, rw, sw = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
+    D[0, ru] = fru
+    D[1, su] = fsu
+    D[2, ru], D[2, su] = 0.5 * fsu, 0.5 * fru
+    D[3, ru], D[3, rw] = -HAT_E3 @ frw, HAT_E3 @ fru
+    D[4, su], D[4, sw] = -HAT_E3 @ fsw, HAT_E3 @ fsu
+    D[5, ru], D[5, sw] = -0.5 * HAT_E3 @ fsw, 0.5 * HAT_E3 @ fru
+    D[5, su], D[5, rw] = -0.5 * HAT_E3 @ frw, 0.5 * HAT_E3 @ fsu
+    D[6, 2] = 1.0
+    D[7, 5] = 1.0
+    return D
+
+
+def strain_hessian(s: np.ndarray) -> np.ndarray:
+    """sum_k s_k d^2 e_k / dF^2, shape (12, 12) (constant: the strains are quadratic in F)."""
+    Hf = np.zeros((12, 12))
+    I3 = np.eye(3)
+    ru, su, rw, sw = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
+    Hf[ru, ru] += s[0] * I3
+    Hf[su, su] += s[1] * I3
+    Hf[ru, su] += 0.5 * s[2] * I3
+    Hf[su, ru] += 0.5 * s[2] * I3
+    Hf[ru, rw] += -s[3] * HAT_E3
+    Hf[rw, ru] += s[3] * HAT_E3
+    Hf[su, sw] += -s[4] * HAT_E3
+    Hf[sw, su] += s[4] * HAT_E3
+    Hf[ru, sw] += -0.5 * s[5] * HAT_E3
+    Hf[sw, ru] += 0.5 * s[5] * HAT_E3
+    Hf[su, rw] += -0.5 * s[5] * HAT_E3
+    Hf[rw, su] += 0.5 * s[5] * HAT_E3
+    return Hf

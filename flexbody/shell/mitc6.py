@@ -1,0 +1,117 @@
+"""MITC6 assumed covariant strains (Lee & Bathe 2004; paper Sec. 5, Eqs. 27-28).
+
+Every assumed field is linear in the covariant strains sampled at the tying points, so it is stored as a
+linear map: ``assumed(r, s) = M(r, s) @ sampled`` with the samples taken at ``TYING_POINTS``.
+
+Covariant components on the reference triangle (r, s); q runs along the hypotenuse, direction (-1, 1)/sqrt 2:
+    e_qq = (e_rr - 2 e_rs + e_ss) / 2,    e_rs = (e_rr + e_ss)/2 - e_qq       (paper Eq. 27)
+    e_qt = (e_st - e_rt) / sqrt 2
+Membrane: each of e_rr, e_ss, e_qq is the linear field through its three tying values.
+Transverse shear, MITC6a (8 parameters, a rotated Raviart-Thomas field):
+    e_rt = a1 + b1 r + c1 s + s (d r + e s),   e_st = a2 + b2 r + c2 s - r (d r + e s).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+R1 = 0.5 - 0.5 / np.sqrt(3.0)  # edge Gauss stations (paper Eq. 28)
+R2 = 0.5 + 0.5 / np.sqrt(3.0)
+C3 = 1.0 / np.sqrt(3.0)
+
+#: The distinct tying points, (r, s). Indices below refer to rows of this array.
+TYING_POINTS = np.array(
+    [
+        (R1, 0.0), (R2, 0.0), (R1, C3),      # 0-2: e_rr
+        (0.0, R1), (0.0, R2), (C3, R1),      # 3-5: e_ss
+        (R2, R1), (R1, R2), (R1, R1),        # 6-8: e_qq (hypotenuse x2, interior)
+        (1.0 / 3.0, 1.0 / 3.0),              # 9: centroid (shear)
+    ]
+)
+N_TYING = len(TYING_POINTS)
+
+_RR_POINTS = (0, 1, 2)
+_SS_POINTS = (3, 4, 5)
+_QQ_POINTS = (6, 7, 8)
+
+
+def _linear_basis(points: np.ndarray, r: float, s: float) -> np.ndarray:
+    """Weights of the linear field through three points, evaluated at (r, s)."""
+    vander = np.column_stack([np.ones(3), points[:, 0], points[:, 1]])
+    return np.linalg.solve(vander.T, np.array([1.0, r, s]))
+
+
+def membrane_map(r: float, s: float) -> np.ndarray:
+    """Assumed membrane strains [e_rr, e_ss, e_rs] at (r, s) from the samples.
+
+    Returns
+    -------
+    M : (3, N_TYING, 3) array with assumed[i] = sum_kj M[i, k, j] sampled[k, j], where
+        sampled[k] = [e_rr, e_ss, e_rs] computed at TYING_POINTS[k].
+    """
+    m = np.zeros((3, N_TYING, 3))
+    w_rr = _linear_basis(TYING_POINTS[list(_RR_POINTS)], r, s)
+    w_ss = _linear_basis(TYING_POINTS[list(_SS_POINTS)], r, s)
+    w_qq = _linear_basis(TYING_POINTS[list(_QQ_POINTS)], r, s)
+    qq_of_sample = np.array([0.5, 0.5, -1.0])  # e_qq = (e_rr + e_ss)/2 - e_rs
+    for w, k in zip(w_rr, _RR_POINTS):
+        m[0, k, 0] += w
+    for w, k in zip(w_ss, _SS_POINTS):
+        m[1, k, 1] += w
+    # e_rs = (e_rr + e_ss)/2 - e_qq, all three assumed fields evaluated at (r, s)
+    m[2] = 0.5 * (m[0] + m[1])
+    for w, k in zip(w_qq, _QQ_POINTS):
+        m[2, k, :] -= w * qq_of_sample
+    return m
+
+
+def _shear_rows(r: float, s: float) -> np.ndarray:
+    """Rows of the MITC6a field: [e_rt; e_st] = rows @ (a1, b1, c1, a2, b2, c2, d, e)."""
+    return np.array(
+        [
+            [1, r, s, 0, 0, 0, s * r, s * s],
+            [0, 0, 0, 1, r, s, -r * r, -r * s],
+        ],
+        dtype=float,
+    )
+
+
+def _shear_tying_system() -> tuple[np.ndarray, np.ndarray]:
+    """The 8x8 tying matrix A and the selection S (8 x N_TYING*2) of sampled shear strains."""
+    rows, select = [], []
+    isq2 = 1.0 / np.sqrt(2.0)
+
+    def pick(k: int, comp: int) -> np.ndarray:
+        v = np.zeros((N_TYING, 2))
+        v[k, comp] = 1.0
+        return v.ravel()
+
+    for k in (0, 1):  # e_rt on the edge s = 0
+        rows.append(_shear_rows(*TYING_POINTS[k])[0])
+        select.append(pick(k, 0))
+    for k in (3, 4):  # e_st on the edge r = 0
+        rows.append(_shear_rows(*TYING_POINTS[k])[1])
+        select.append(pick(k, 1))
+    for k in (6, 7):  # e_qt on the hypotenuse
+        f = _shear_rows(*TYING_POINTS[k])
+        rows.append(isq2 * (f[1] - f[0]))
+        select.append(isq2 * (pick(k, 1) - pick(k, 0)))
+    for comp in (0, 1):  # e_rt and e_st at the centroid
+        rows.append(_shear_rows(*TYING_POINTS[9])[comp])
+        select.append(pick(9, comp))
+    return np.array(rows), np.array(select)
+
+
+_SHEAR_A, _SHEAR_S = _shear_tying_system()
+
+
+def shear_map(r: float, s: float) -> np.ndarray:
+    """Assumed transverse shear strains [e_rt, e_st] at (r, s) from the samples.
+
+    Returns
+    -------
+    M : (2, N_TYING, 2) array with assumed[i] = sum_kj M[i, k, j] sampled[k, j], where
+        sampled[k] = [e_rt, e_st] computed at TYING_POINTS[k].
+    """
+    coeffs = np.linalg.solve(_SHEAR_A, _SHEAR_S)  # (8, N_TYING*2)
+    return (_shear_rows(r, s) @ coeffs).reshape(2, N_TYING, 2)

@@ -1,0 +1,1 @@
+"""Time and load integrators for flexbody: static Newton, arc-length, Lie-group generalized-alpha."""

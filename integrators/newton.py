@@ -1,0 +1,184 @@
+"""The Newton loop shared by statics and dynamics, with the tangent-reuse policy and its counters.
+
+The tangent of the SE(3) local-frame formulation does not change under rigid motion, so a factorized
+tangent often stays good over several iterations and steps. Policy:
+- "full": a new tangent and factorization every iteration (classical Newton);
+- "modified": keep the factorization while the residual contracts fast enough (ratio < ``refresh_ratio``);
+  refresh it otherwise, and always when an iteration diverges.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from integrators.linear import LinearSolver, SingularMatrixError
+
+
+@dataclass
+class NewtonSettings:
+    rtol: float = 1e-8            # ||r|| <= rtol * reference force
+    atol: float = 1e-12           # absolute floor on ||r||
+    increment_tol: float = 1e-11  # or: max |dq_i / scale_i| <= increment_tol (round-off floor reached)
+    max_iterations: int = 25
+    policy: str = "full"          # "full" or "modified"
+    refresh_ratio: float = 0.25   # modified Newton: refresh when ||r_k+1|| > ratio ||r_k||
+    divergence_factor: float = 1e6
+    line_search: bool = False     # Crisfield's line search on s(a) = dq . r(q o exp(a dq))
+    line_search_ratio: float = 0.5
+    line_search_max: int = 6
+
+    def __post_init__(self) -> None:
+        if self.policy not in ("full", "modified"):
+            raise ValueError(f"Newton policy must be 'full' or 'modified', got {self.policy!r}")
+        if not (self.rtol > 0 and self.max_iterations >= 1):
+            raise ValueError("Newton rtol must be > 0 and max_iterations >= 1")
+
+
+@dataclass
+class NewtonStats:
+    """Counters over a whole run."""
+
+    iterations: int = 0
+    tangent_updates: int = 0
+    factorizations: int = 0
+    residual_evaluations: int = 0
+
+
+@dataclass
+class NewtonOutcome:
+    converged: bool
+    iterations: int
+    residuals: list[float] = field(default_factory=list)
+    reason: str = ""
+
+
+def newton_solve(state, residual: Callable, residual_and_tangent: Callable, update: Callable,
+                 reference_norm: float, settings: NewtonSettings, solver: LinearSolver,
+                 stats: NewtonStats, fresh_tangent: bool = True, dof_scale=1.0,
+                 conjugate: Callable | None = None):
+    """Solve r(q) = 0 from ``state``; returns (state, outcome). Never returns a non-finite state.
+
+    Converged when ||r|| <= max(rtol * reference_norm, atol), or when an increment scaled by ``dof_scale``
+    (a length for translations, 1 for rotations) is below ``increment_tol``: the residual has then reached
+    its round-off floor, which for thin shells (membrane stiffness >> bending load) can lie above rtol.
+    ``solver`` may hold a factorization from earlier iterations or steps; with ``fresh_tangent`` (or the
+    "full" policy) it is refreshed at the first iteration.
+
+    Line search (Crisfield): s(a) = w . r(q o exp(a dq)) with w = conjugate(q, dq) the increment paired with
+    the residual by virtual work (s is the derivative of the energy along the step for conservative
+    loads). The full step is kept when |s(1)| <= ratio |s(0)|; otherwise a is found by secant steps on s.
+    Thin shells need this: after a bending step the membrane residual is huge but nearly orthogonal to
+    the step, which a residual-norm line search would wrongly reject.
+    """
+    scale = max(reference_norm, settings.atol)
+    tol = max(settings.rtol * scale, settings.atol)
+    outcome = NewtonOutcome(False, 0)
+    need_tangent = fresh_tangent or settings.policy == "full" or not solver.ready
+    r = None
+    for it in range(settings.max_iterations + 1):
+        try:
+            if need_tangent:
+                r, K = residual_and_tangent(state)
+                stats.tangent_updates += 1
+                stats.residual_evaluations += 1
+            elif r is None:
+                r = residual(state)
+                stats.residual_evaluations += 1
+        except FloatingPointError as exc:
+            outcome.reason = f"non-finite state: {exc}"
+            return state, outcome
+        norm = float(np.linalg.norm(r))
+        if not np.isfinite(norm):
+            outcome.reason = "non-finite residual"
+            return state, outcome
+        outcome.residuals.append(norm)
+        if norm <= tol:
+            outcome.converged = True
+            outcome.iterations = it
+            return state, outcome
+        if it == settings.max_iterations:
+            outcome.reason = f"no convergence in {settings.max_iterations} iterations (|r| = {norm:.3e}, tol {tol:.1e})"
+            outcome.iterations = it
+            return state, outcome
+        if len(outcome.residuals) > 1 and norm > settings.divergence_factor * max(outcome.residuals[0], tol):
+            outcome.reason = f"diverging (|r| grew from {outcome.residuals[0]:.3e} to {norm:.3e})"
+            outcome.iterations = it
+            return state, outcome
+        if need_tangent:
+            try:
+                solver.factorize(K)
+            except SingularMatrixError as exc:
+                outcome.reason = str(exc)
+                return state, outcome
+            stats.factorizations += 1
+        try:
+            dq = solver.solve(-r)
+        except SingularMatrixError as exc:
+            outcome.reason = str(exc)
+            return state, outcome
+        if settings.line_search:
+            state, r_new = _line_search(state, dq, r, residual, update, conjugate, settings, stats)
+        else:
+            state, r_new = update(state, dq), None
+        stats.iterations += 1
+        outcome.iterations = it + 1
+        if np.max(np.abs(dq / dof_scale)) <= settings.increment_tol and len(outcome.residuals) > 1:
+            outcome.converged = True
+            outcome.residuals.append(float("nan"))  # not evaluated: converged on the increment
+            return state, outcome
+        # decide on the tangent for the next iteration
+        if settings.policy == "full":
+            need_tangent = True
+        else:
+            if r_new is None:
+                r_new = residual(state)
+                stats.residual_evaluations += 1
+            norm_new = float(np.linalg.norm(r_new))
+            need_tangent = not (norm_new < settings.refresh_ratio * norm)
+            r = None if need_tangent else r_new
+    return state, outcome
+
+
+def _line_search(state, dq, r0, residual, update, conjugate, settings: NewtonSettings, stats: NewtonStats):
+    """Secant line search on s(a) = w . r(q o exp(a dq)); returns the new state and its residual."""
+    w = dq if conjugate is None else conjugate(state, dq)
+    s0 = float(w @ r0)
+    trial = update(state, dq)
+    try:
+        r1 = residual(trial)
+    except FloatingPointError:
+        r1 = None
+    stats.residual_evaluations += 1
+    if r1 is None or not np.all(np.isfinite(r1)):
+        s1 = np.inf
+    else:
+        s1 = float(w @ r1)
+    if s0 >= 0 or abs(s1) <= settings.line_search_ratio * abs(s0):
+        return trial, r1
+    a_lo, s_lo, a_hi, s_hi = 0.0, s0, 1.0, s1
+    best = (abs(s1), 1.0, trial, r1)
+    for _ in range(settings.line_search_max):
+        if np.isfinite(s_hi) and s_hi != s_lo:
+            a = a_hi - s_hi * (a_hi - a_lo) / (s_hi - s_lo)
+            a = float(np.clip(a, a_lo + 0.1 * (a_hi - a_lo), a_hi - 0.1 * (a_hi - a_lo)))
+        else:
+            a = 0.5 * (a_lo + a_hi)
+        trial = update(state, a * dq)
+        try:
+            ra = residual(trial)
+        except FloatingPointError:
+            ra = None
+        stats.residual_evaluations += 1
+        sa = float(w @ ra) if ra is not None and np.all(np.isfinite(ra)) else np.inf
+        if abs(sa) < best[0]:
+            best = (abs(sa), a, trial, ra)
+        if abs(sa) <= settings.line_search_ratio * abs(s0):
+            return trial, ra
+        if sa < 0:
+            a_lo, s_lo = a, sa
+        else:
+            a_hi, s_hi = a, sa
+    return best[2], best[3]

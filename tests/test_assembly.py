@@ -1,0 +1,79 @@
+"""The assembled system: tangent against group finite differences with constraints and loads."""
+
+import math
+
+import numpy as np
+import pytest
+
+from flexbody.assembly import Model, ModelError
+from flexbody.body import ShellBody
+from flexbody.constraints import Fix, Symmetry
+from flexbody.loads import FollowerPressure, NodalLoad
+from flexbody.mesh import generators
+from flexbody.shell.material import ShellMaterial
+
+
+def fd_check(model, state, lam, eps=1e-6):
+    r, K = model.residual_and_tangent(state, lam)
+    K = K.toarray()
+    Kfd = np.zeros_like(K)
+    for j in range(model.n_dof):
+        e = np.zeros(model.n_dof)
+        e[j] = eps
+        Kfd[:, j] = (model.residual(model.update(state, e), lam) - model.residual(model.update(state, -e), lam)) / (2 * eps)
+    return np.abs(K - Kfd).max() / np.abs(K).max()
+
+
+def random_state(model, rng, scale=0.05):
+    state = model.initial_state()
+    for _ in range(3):
+        state = model.update(state, scale * rng.normal(size=model.n_dof))
+    return state
+
+
+def cylinder_model(kernel="reference"):
+    R = 2.0
+    mesh = generators.cylinder(R, 1.5, 2, 2, angle=math.pi / 2)
+    body = ShellBody(mesh, ShellMaterial(1e4, 0.3, 0.05), kernel=kernel)
+    x = mesh.nodes
+    cons = [Symmetry(np.flatnonzero(np.abs(x[:, 1]) < 1e-9), (0, 1.0, 0)),
+            Symmetry(np.flatnonzero(np.abs(x[:, 2]) < 1e-9), (0, 0, 1.0)),
+            Fix([mesh.nearest_node([0, R, 1.5])], ("x",))]
+    a = mesh.nearest_node([R, 0, 0.75])
+    loads = [NodalLoad([a], force=[3.0, 0, 1.0]),
+             NodalLoad([mesh.nearest_node([0, R, 0.75])], moment=[0.5, 0.2, 0.1]),
+             NodalLoad([mesh.nearest_node([R * math.cos(0.7), R * math.sin(0.7), 1.5])], force=[0.3, 0.2, 0.1],
+                       moment=[0.1, 0.4, 0], follower=True),
+             FollowerPressure(2.0)]
+    return Model(body, cons, loads)
+
+
+def test_model_tangent_with_symmetry_basis_and_loads():
+    model = cylinder_model()
+    state = random_state(model, np.random.default_rng(0))
+    assert fd_check(model, state, 0.7) < 1e-6
+
+
+def test_symmetry_frames_keep_their_plane():
+    """On a symmetry plane the nodal frame keeps one in-plane axis along the plane normal."""
+    model = cylinder_model()
+    state = random_state(model, np.random.default_rng(1))
+    x = model.body.mesh.nodes
+    for i in np.flatnonzero(np.abs(x[:, 1]) < 1e-9):
+        assert np.isclose(np.abs(state.frames[i][:, :2].T @ [0, 1.0, 0]).max(), 1.0, atol=1e-12)
+        assert abs(state.x[i, 1]) < 1e-12
+
+
+def test_load_on_constrained_dof_is_rejected():
+    mesh = generators.strip(2.0, 1.0, 2, 1)
+    body = ShellBody(mesh, ShellMaterial(1e4, 0.3, 0.05), kernel="reference")
+    clamped = mesh.node_set("clamped")
+    with pytest.raises(ModelError, match=f"node {clamped[0]}"):
+        Model(body, [Fix(clamped, "all")], [NodalLoad([clamped[0]], force=[0, 0, 1.0])])
+
+
+def test_unknown_node_is_rejected():
+    mesh = generators.strip(2.0, 1.0, 2, 1)
+    body = ShellBody(mesh, ShellMaterial(1e4, 0.3, 0.05), kernel="reference")
+    with pytest.raises(ModelError, match="node 999"):
+        Model(body, [Fix([999], "all")])
