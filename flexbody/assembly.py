@@ -78,10 +78,33 @@ class Model:
         size = float(np.ptp(self.body.mesh.nodes, axis=0).max()) or 1.0
         scale6 = np.tile([size, size, size, 1.0, 1.0, 1.0], n)
         self.dof_scale = scale6[self.free]  # translations in units of the model size, rotations in rad
-        self._rows = np.repeat(self._dof6, 36, axis=1).ravel()
-        self._cols = np.tile(self._dof6, (1, 36)).ravel()
+        self._build_pattern()
 
     # -- setup -------------------------------------------------------------------------------------------
+    def _build_pattern(self) -> None:
+        """CSR pattern of the free-DoF matrix and, for every element and nodal entry, its data slot."""
+        n, m = self.body.n_nodes, self.body.mesh.n_elements
+        n_free = self.free.size
+        index = -np.ones(6 * n, dtype=np.int64)
+        index[self.free] = np.arange(n_free)
+        fe = index[self._dof6]                                        # (m, 36)
+        er, ec = np.repeat(fe, 36, axis=1).ravel(), np.tile(fe, (1, 36)).ravel()
+        fn = index[(6 * np.arange(n)[:, None] + np.arange(6))]        # (n, 6)
+        nr, nc = np.repeat(fn, 6, axis=1).ravel(), np.tile(fn, (1, 6)).ravel()
+        rows, cols = np.concatenate([er, nr]), np.concatenate([ec, nc])
+        valid = (rows >= 0) & (cols >= 0)
+        keys = np.unique(rows[valid] * n_free + cols[valid])
+        self._indices = (keys % n_free).astype(np.int32)
+        self._indptr = np.searchsorted(keys // n_free, np.arange(n_free + 1)).astype(np.int32)
+        slot = lambda r, c: np.where((r >= 0) & (c >= 0), np.searchsorted(keys, r * n_free + c), -1)
+        self._slot_elem = slot(er, ec).reshape(m, 36, 36)
+        self._slot_node = slot(nr, nc).reshape(n, 6, 6)
+
+    def _scatter(self, slots: np.ndarray, values: np.ndarray, out: np.ndarray) -> None:
+        slots, values = slots.ravel(), values.ravel()
+        mask = slots >= 0
+        out += np.bincount(slots[mask], weights=values[mask], minlength=out.size)
+
     def _check_nodes(self, nodes: np.ndarray, what: str) -> None:
         n = self.body.n_nodes
         if nodes.size == 0:
@@ -195,7 +218,7 @@ class Model:
             conn = self.body.mesh.elements[elems]
             Rc = R[conn]                                        # (k, 6, 3, 3)
             local = np.einsum("kiba,kijbc,kjcd->kijad", Rc, dF, Rc)  # R_I^T dF_IJ R_J
-            press.append((conn, local))
+            press.append((elems, conn, local))
         return f, blocks, press
 
     def _row_maps(self, state: ShellState) -> np.ndarray:
@@ -238,33 +261,32 @@ class Model:
         r6, Ke, ext_blocks, press = self._residual6(state, lam, want_tangent=True)
         self.counters.tangents += 1
         n = self.body.n_nodes
-        rows, cols, vals = [self._rows], [self._cols], [Ke.ravel()]
-        nd = (6 * np.arange(n)[:, None] + np.arange(6)).reshape(n, 6)
-        rows.append(np.repeat(nd, 6, axis=1).ravel())
-        cols.append(np.tile(nd, (1, 6)).ravel())
-        vals.append((-lam * ext_blocks).ravel())
-        for conn, local in press:
-            d = (6 * conn[:, :, None] + np.arange(3)).reshape(len(conn), 18)
-            rows.append(np.repeat(d, 18, axis=1).ravel())
-            cols.append(np.tile(d, (1, 18)).ravel())
-            vals.append((-lam * local.transpose(0, 1, 3, 2, 4).reshape(len(conn), 18, 18)).ravel())
-        K6 = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                           shape=(6 * n, 6 * n))
-        S = self._row_maps(state)
-        row_blocks = np.tile(np.eye(6), (n, 1, 1))
-        row_blocks[:, :3, :3] = S
-        col_blocks = np.tile(np.eye(6), (n, 1, 1))
+        conn = self.body.mesh.elements
+        S = self._row_maps(state)                                   # rows: S_I r_u,I
+        C = np.tile(np.eye(3), (n, 1, 1))                           # columns: delta u_I = C_I delta v_I
         idx = np.flatnonzero(self.has_basis)
-        col_blocks[idx, :3, :3] = np.transpose(S[idx], (0, 2, 1))
-        K6 = sp.block_diag(row_blocks, format="csr") @ K6 @ sp.block_diag(col_blocks, format="csr")
-        # the turning frame: d(S_I r_u,I)/d theta_I = S_I (K_u theta - hat(r_u,I))
-        corr = -np.einsum("nij,njk->nik", S, hat_many(r6[:, :3]))
-        rr = (6 * np.arange(n)[:, None, None] + np.arange(3)[None, :, None]).repeat(3, axis=2)
-        cc = (6 * np.arange(n)[:, None, None] + 3 + np.arange(3)[None, None, :]).repeat(3, axis=1)
-        K6 = K6 + sp.csr_matrix((corr.ravel(), (rr.ravel(), cc.ravel())), shape=K6.shape)
+        C[idx] = np.transpose(S[idx], (0, 2, 1))
+        data = np.zeros(self._indices.size)
+        self._scatter(self._slot_elem, self._transform_blocks(Ke.reshape(-1, 6, 6, 6, 6), S[conn], C[conn]), data)
+        nodal = -lam * ext_blocks
+        nodal[:, :3, 3:] -= hat_many(r6[:, :3])                     # the turning frame: -hat(r_u,I)
+        nodal = self._transform_blocks(nodal[:, None, :, None, :], S[:, None], C[:, None])
+        self._scatter(self._slot_node, nodal, data)
+        for elems, conn_p, local in press:
+            blocks = np.zeros((len(elems), 6, 6, 6, 6))
+            blocks[:, :, :3, :, :3] = -lam * local.transpose(0, 1, 3, 2, 4)
+            self._scatter(self._slot_elem[elems], self._transform_blocks(blocks, S[conn_p], C[conn_p]), data)
+        K = sp.csr_matrix((data, self._indices, self._indptr), shape=(self.n_dof, self.n_dof))
         r = self._rotate_rows(state, r6).ravel()[self.free]
-        K = K6[self.free][:, self.free].tocsc()
-        return r, K
+        return r, K.tocsc()
+
+    @staticmethod
+    def _transform_blocks(K: np.ndarray, S: np.ndarray, C: np.ndarray) -> np.ndarray:
+        """Blocks K[e, a, i, b, j] (node a comp i, node b comp j) with rows S_a and columns C_b on translations."""
+        K = K.copy()
+        K[:, :, :3] = np.einsum("eaik,eakbj->eaibj", S, K[:, :, :3])
+        K[:, :, :, :, :3] = np.einsum("eaibk,ebkj->eaibj", K[:, :, :, :, :3], C)
+        return K.reshape(len(K), -1)
 
     def external_force(self, state: ShellState) -> np.ndarray:
         """f_ext(q) on the free DoFs (the residual is f_int - lambda f_ext)."""
