@@ -32,13 +32,34 @@ def _parse_sets(items: list[str]) -> dict:
     return out
 
 
+def _scene_builder(name: str):
+    """A built-in scene builder, or ``build`` from a user's Python scene file."""
+    import importlib.util
+    import os
+
+    from flexbody.scenes.builtin import BUILTIN
+    if name in BUILTIN:
+        return BUILTIN[name]
+    if name.endswith(".py"):
+        if not os.path.isfile(name):
+            raise SystemExit(f"flexbody: scene file {name!r} does not exist")
+        spec = importlib.util.spec_from_file_location("flexbody_user_scene", name)
+        module = importlib.util.module_from_spec(spec)
+        try:
+            spec.loader.exec_module(module)
+        except Exception as exc:  # a user's file: report, do not trace back into flexbody
+            raise SystemExit(f"flexbody: cannot load scene file {name!r}: {type(exc).__name__}: {exc}") from None
+        if not callable(getattr(module, "build", None)):
+            raise SystemExit(f"flexbody: scene file {name!r} must define a function build(**parameters) -> Scene")
+        return module.build
+    raise SystemExit(f"flexbody: unknown scene {name!r}; built-in scenes: {', '.join(BUILTIN)} "
+                     "(or give a path to a .py scene file)")
+
+
 def _build(name: str, params: dict):
     import inspect
 
-    from flexbody.scenes.builtin import BUILTIN
-    if name not in BUILTIN:
-        raise SystemExit(f"flexbody: unknown scene {name!r}; built-in scenes: {', '.join(BUILTIN)}")
-    builder = BUILTIN[name]
+    builder = _scene_builder(name)
     allowed = [p for p in inspect.signature(builder).parameters]
     unknown = [k for k in params if k not in allowed]
     if unknown:
@@ -47,7 +68,8 @@ def _build(name: str, params: dict):
     try:
         return builder(**params)
     except (ValueError, TypeError, KeyError) as exc:
-        raise SystemExit(f"flexbody: cannot build scene {name!r}: {exc}") from None
+        msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        raise SystemExit(f"flexbody: cannot build scene {name!r}: {msg}") from None
 
 
 def cmd_list(args) -> int:

@@ -17,8 +17,12 @@ class SingularMatrixError(RuntimeError):
 class LinearSolver:
     """Sparse LU (SuperLU) with a deliberate column ordering.
 
-    MMD_AT_PLUS_A suits the structurally symmetric shell matrices (measured 3-4x faster than COLAMD).
-    ``factorizations`` and ``solves`` count the work done.
+    The shell tangents are structurally symmetric and (near equilibrium) nearly symmetric, so the default
+    is SuperLU's symmetric mode: MMD ordering of A^T + A and diagonal pivots. Measured on the slit annular
+    plate (6300 DoF): 0.031 s, against 4.6 s with the default partial pivoting, whose row exchanges
+    destroy the fill-reducing ordering (24e6 instead of 1.2e6 nonzeros in L+U). If the diagonal pivots
+    fail, the factorization is retried with threshold pivoting. ``factorizations`` and ``solves`` count
+    the work done.
     """
 
     ordering: str = "MMD_AT_PLUS_A"
@@ -27,8 +31,17 @@ class LinearSolver:
     _lu: object = field(default=None, repr=False)
 
     def factorize(self, K: sp.spmatrix) -> None:
+        K = sp.csc_matrix(K)
         try:
-            self._lu = spla.splu(sp.csc_matrix(K), permc_spec=self.ordering)
+            self._lu = spla.splu(K, permc_spec=self.ordering, diag_pivot_thresh=0.0,
+                                 options=dict(SymmetricMode=True))
+        except RuntimeError:
+            self._lu = None
+        if self._lu is not None and not np.all(np.isfinite(self._lu.U.diagonal())):
+            self._lu = None
+        try:
+            if self._lu is None:
+                self._lu = spla.splu(K, permc_spec=self.ordering, diag_pivot_thresh=0.1)
         except RuntimeError as exc:  # SuperLU: "Factor is exactly singular"
             self._lu = None
             raise SingularMatrixError(

@@ -98,14 +98,16 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
 def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, max_steps: int = 500,
                settings: NewtonSettings | None = None, min_increment_ratio: float = 1e-3,
                max_increment_ratio: float = 4.0, desired_iterations: int = 5,
+               max_load_increment: float | None = None,
                on_step: Callable | None = None, state=None) -> StaticResult:
     """Crisfield's cylindrical arc-length method: ||Delta q|| = Delta l in each step.
 
     The first step's arc length follows from a load increment ``initial_increment``. Each iteration solves
     K dq_r = -r and K dq_f = f_ext and picks the load correction from the quadratic constraint, taking the
     root closest to the previous direction (this follows snap-through and snap-back). The step length adapts
-    to ``desired_iterations``. The run ends when lam reaches ``lam_max``: the last step is then solved
-    under load control at exactly lam_max.
+    to ``desired_iterations``; ``max_load_increment`` caps the load-factor change of a step (a dense record
+    of the path). The run ends when lam reaches ``lam_max``: the last step is then solved under load
+    control at exactly lam_max.
     """
     settings = settings or NewtonSettings()
     state = model.initial_state() if state is None else state
@@ -132,6 +134,9 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
         dq_f = solver.solve(model.external_force(state))
         sign = np.sign(dq_f @ prev_dir) or prev_dlam_sign
         dlam = sign * dl / np.linalg.norm(dq_f)
+        if max_load_increment is not None and abs(dlam) > max_load_increment:
+            dl *= max_load_increment / abs(dlam)
+            dlam = sign * max_load_increment
         Dq = dlam * dq_f
         trial = model.update(state, Dq)
         trial_lam = lam + dlam

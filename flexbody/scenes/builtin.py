@@ -107,7 +107,7 @@ def pullout_cylinder(n_circ: int = 12, n_axial: int = 8, thickness: float = 0.09
     outs = [Output("W_A", a, (1.0, 0, 0)), Output("minus_U_B", mesh.nearest_node([0, R, 0]), (0, -1.0, 0)),
             Output("minus_U_C", mesh.nearest_node([0, R, L / 2]), (0, -1.0, 0))]
     return Scene("pullout_cylinder", "open cylinder pulled by two radial forces, octant (Sze et al. 2004, 3.5)",
-                 model, StaticAnalysis("arc_length", (1.0,), arc_increment, NewtonSettings(rtol=1e-7)), outs, ref,
+                 model, StaticAnalysis("arc_length", (1.0,), arc_increment, 0.025, NewtonSettings(rtol=1e-7)), outs, ref,
                  dict(n_circ=n_circ, n_axial=n_axial, thickness=thickness, arc_increment=arc_increment, tying=tying))
 
 

@@ -47,6 +47,7 @@ class StaticAnalysis:
     method: str = "load_control"
     load_factors: tuple[float, ...] = tuple(np.linspace(0.05, 1.0, 20))
     arc_increment: float = 0.05
+    max_load_increment: float | None = None
     newton: NewtonSettings = field(default_factory=NewtonSettings)
 
 
@@ -137,7 +138,7 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
         result = load_control(model, a.load_factors, settings=a.newton, on_step=record)
     elif a.method == "arc_length":
         result = arc_length(model, lam_max=max(a.load_factors), initial_increment=a.arc_increment,
-                            settings=a.newton, on_step=record)
+                            max_load_increment=a.max_load_increment, settings=a.newton, on_step=record)
     else:
         raise ValueError(f"analysis method must be 'load_control' or 'arc_length', got {a.method!r}")
     wall = time.perf_counter() - t0
