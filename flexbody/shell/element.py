@@ -1,28 +1,40 @@
 """The fast element: numba kernels for the internal force and tangent of the six-node SE(3) shell.
 
 Computes, for a batch of elements, exactly what :func:`flexbody.shell.element_reference.internal_force_tangent`
-computes (same terms of the second variation, same strains), but arranged so that nothing is a dense
-(8 x 136) or (12 x 36) product at a point. Three changes of bookkeeping make it cheap:
+computes (the same strains and the same terms of the second variation), arranged so that nothing is a dense
+(8 x 136) or (12 x 36) product at a point:
 
-1. **Relative coordinates.** Per element, the 36 local nodal motions h = [u_I, theta_I] are mapped to
-   z = [dx_I, dtheta_0, dd_1..dd_5] with dx_I = R_I du_I (global translation) and the variations of the
-   relative rotation vectors dd_I = T^-1(d_I) dtheta_I - T^-1(-d_I) dtheta_0 (paper Eq. 31): z = P h.
-   In z every point quantity is a *scalar* (shape function) combination of a few 3x3 blocks.
-2. **Point slots.** At an evaluation point the strain measures depend on z only through the 18 numbers
-   xi = [dx_,r, dx_,s, dtheta_0, dd, dd_,r, dd_,s] = Pi z, where Pi holds N_I and dN_I (times I_3). The
-   Jacobian G, the B rows and the contracted second variation are formed in xi (12 x 18 and 18 x 18 with
-   3x3 blocks written out in closed form) and expanded once per point into z (two sparse stages).
-3. **Node terms.** K_h = P^T K_z P + (D P^T[.]) f_z: the derivative of P adds hat(f_u,I) in the (u_I, theta_I)
-   block and the D T^-1 terms of Delta(delta d_I) (contracted with f_z at dd_I, which equals the reference's
+1. **Relative coordinates.** Per element the 36 local nodal motions h = [u_I, theta_I] are mapped to
+   z = [dx_I, dtheta_0, dd_1..dd_5], dx_I = R_I du_I (global translations) and the variations of the relative
+   rotation vectors dd_I = T^-1(d_I) dtheta_I - T^-1(-d_I) dtheta_0 (paper Eq. 31): z = P h. In z every point
+   quantity is a *scalar* (shape function) combination of a few 3x3 blocks. z is stored component-major,
+   translations first: dx_I[c] at 6c + I, rotations (dtheta_0, dd_I)[c] at 18 + 6c + I.
+2. **Point slots.** At an evaluation point the strain measures depend on z only through 18 numbers
+   xi = [dx_,r, dx_,s, dtheta_0, dd, dd_,r, dd_,s] = Pi z (Pi holds N_I, dN_I). The Jacobian G (12 x 18), the B
+   rows and the contracted second variation (18 x 18) are formed in xi from closed-form 3x3 blocks and
+   expanded once per point into z in two sparse stages. Only the rotation-rotation block of the second
+   variation is non-symmetric: the translation rows are accumulated as an upper triangle, the rotation block
+   in full.
+3. **Node terms.** K_h = P^T K_z P + (D P^T[.]) f_z: the derivative of P gives hat(f_u,I) in the (u_I, theta_I)
+   block and the D T^-1 terms of Delta(delta d_I), contracted with f_z at dd_I (which equals the reference's
    sum over points of N_I g_d + dN_I . g_da).
 
-The MITC6 assumed-strain map A (7, 8, 17, 8) is compressed in Python: rows of a Gauss point that only use
-that Gauss point ("local": bending; everything with tying off) enter the point's 18 x 18 slot matrix; the
-other rows ("nonlocal": membrane and shear with tying on) are sums of sampled rows at the tying points and
-are assembled as rank-5 updates per Gauss point. Evaluation points no row refers to are skipped.
+The assumed-strain map A (7, 8, 17, 8) is compressed in Python (:class:`CompressedMaps`): rows of a Gauss point
+that only use that Gauss point ("local": bending; all rows with tying off) enter the point's 18 x 18 slot matrix;
+the other rows ("nonlocal": membrane and shear with tying on) are factored exactly, A_nl = M E, through the
+independent sampled combinations E at the tying points (17 for MITC6: e_rr, e_ss, e_qq, e_rt, e_st, e_qt), so
+their material stiffness is one symmetric rank-17 update S^T (sum_g M_g^T C_g M_g) S per element. Evaluation
+points that no row uses are skipped.
 
-Workspaces are allocated once per parallel chunk (a few per thread), never per element or point.
-The section stiffness must be symmetric (it is for :class:`~flexbody.shell.material.ShellMaterial`).
+SO(3): ``flexbody.lie.kernels.log_into`` and ``kernels.coefficients`` (closed forms above the series switch);
+below the switch the coefficients are the same Taylor series ``so3.SERIES``, evaluated fused, once per point.
+The tangent-operator derivatives are the formulas of ``kernels.d_tangent_into`` / ``d_tangent_inv_into`` /
+``d2_tangent_into`` written with these precomputed coefficients (a point needs up to eight of them).
+
+Performance notes: the small helpers are inlined at numba-IR level so that the per-point functions contain no
+calls and numba's reference-count pruning removes every incref/decref (an atomic operation) from them; the
+element loop runs inside one function per parallel chunk, whose workspaces are allocated once per chunk
+(a few chunks per thread). Nothing is allocated per element or point. The section stiffness must be symmetric.
 """
 
 from __future__ import annotations
@@ -30,31 +42,72 @@ from __future__ import annotations
 import math
 
 import numba
+import numba.core.cpu
 import numpy as np
 from numba import prange
 
 from flexbody.lie import kernels as lk
+from flexbody.lie.so3 import SERIES, SERIES_SWITCH
 from flexbody.shell.geometry import EVAL_DN, EVAL_N, GAUSS_OFFSET, N_GAUSS
 from flexbody.shell.mitc6 import N_TYING
 
 N_EVAL = N_TYING + N_GAUSS
 NDOF = 36
 
-jit = numba.njit(cache=True)
+# The kernels below never allocate: they are compiled without reference counting where numba allows it
+# (``_nrt=False``; otherwise every array argument costs an atomic incref/decref per call). FMA contraction
+# is allowed (results agree with the numpy reference to round-off).
+_FLAGS = dict(cache=True, error_model="numpy", fastmath={"contract"})
+if hasattr(numba.core.cpu.CPUTargetOptions, "_nrt"):
+    _FLAGS["_nrt"] = False
+jit = numba.njit(**_FLAGS)
+inl = numba.njit(inline="always", **_FLAGS)
+_u = numba.uint64  # unsigned inner-loop indices with run-time bounds: lets LLVM vectorize the loops
 
-_EVAL_N = np.ascontiguousarray(EVAL_N, dtype=np.float64)     # (17, 6)
-_EVAL_DN = np.ascontiguousarray(EVAL_DN, dtype=np.float64)   # (17, 2, 6)
+_EN = np.ascontiguousarray(EVAL_N, dtype=np.float64)     # (17, 6)
+_EDN = np.ascontiguousarray(EVAL_DN, dtype=np.float64)   # (17, 2, 6)
+
+_SWITCH = SERIES_SWITCH
+_SA1, _SA2, _SA3 = SERIES["a1"], SERIES["a2"], SERIES["a3"]
+_SC2, _SC3, _SE2, _SE3 = SERIES["c2"], SERIES["c3"], SERIES["e2"], SERIES["e3"]
+_SA4, _SC4 = SERIES["a4"], SERIES["c4"]
+_NENT = len(_SA1)
+_NCOT = len(_SA4)
+assert all(len(SERIES[k]) == _NENT for k in ("a1", "a2", "a3", "c2", "c3", "e2", "e3")) and len(_SC4) == _NCOT
 
 # slots of the point coordinates xi (3 components each)
 _U0, _U1, _V0, _V, _W0, _W1 = 0, 1, 2, 3, 4, 5
 
+# z is stored component-major and padded to 8 lanes: dx_I[c] at 8c + I, (dtheta_0, dd_I)[c] at 24 + 8c + I
+NZ = 48
+_ZR = 24
+# The tangent in z is accumulated on a pattern: translation rows in all columns, rotation rows from column _KR;
+# only the upper triangle of the symmetric part and the rotation-rotation block are used, the rest is
+# overwritten by the mirror in _finish_tangent.
+_KR = 16
+
+
+def _slot_weights() -> np.ndarray:
+    """Pi per point as 8-lane rows: (17, 6 slots, 8); translation slots U0, U1 act on dx, the others on rotations."""
+    w = np.zeros((N_EVAL, 6, 8))
+    w[:, _U0, :6] = EVAL_DN[:, 0]
+    w[:, _U1, :6] = EVAL_DN[:, 1]
+    w[:, _V0, 0] = 1.0
+    w[:, _V, 1:6] = EVAL_N[:, 1:]
+    w[:, _W0, 1:6] = EVAL_DN[:, 0, 1:]
+    w[:, _W1, 1:6] = EVAL_DN[:, 1, 1:]
+    return w
+
+
+_PI8 = _slot_weights()
+
 
 # ----------------------------------------------------------------------------------------------------------
-# 3x3 helpers (allocation free)
+# 3x3 helpers (inlined)
 # ----------------------------------------------------------------------------------------------------------
 
 
-@jit
+@inl
 def _mm(A, B, out):
     """out = A B."""
     for i in range(3):
@@ -62,7 +115,7 @@ def _mm(A, B, out):
             out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
 
 
-@jit
+@inl
 def _mmT(A, B, out):
     """out = A B^T."""
     for i in range(3):
@@ -70,7 +123,7 @@ def _mmT(A, B, out):
             out[i, j] = A[i, 0] * B[j, 0] + A[i, 1] * B[j, 1] + A[i, 2] * B[j, 2]
 
 
-@jit
+@inl
 def _mTm(A, B, out):
     """out = A^T B."""
     for i in range(3):
@@ -78,20 +131,19 @@ def _mTm(A, B, out):
             out[i, j] = A[0, i] * B[0, j] + A[1, i] * B[1, j] + A[2, i] * B[2, j]
 
 
-@jit
-def _hat(v0, v1, v2, out):
-    out[0, 0] = 0.0
-    out[0, 1] = -v2
-    out[0, 2] = v1
-    out[1, 0] = v2
-    out[1, 1] = 0.0
-    out[1, 2] = -v0
-    out[2, 0] = -v1
-    out[2, 1] = v0
-    out[2, 2] = 0.0
+@inl
+def _Rhat(R, v0, v1, v2, out):
+    """out = R hat(v)."""
+    for i in range(3):
+        r0 = R[i, 0]
+        r1 = R[i, 1]
+        r2 = R[i, 2]
+        out[i, 0] = r1 * v2 - r2 * v1
+        out[i, 1] = r2 * v0 - r0 * v2
+        out[i, 2] = r0 * v1 - r1 * v0
 
 
-@jit
+@inl
 def _add_blk(core, s, t, M, alpha):
     """core[block s, block t] += alpha M."""
     for i in range(3):
@@ -99,40 +151,43 @@ def _add_blk(core, s, t, M, alpha):
             core[3 * s + i, 3 * t + j] += alpha * M[i, j]
 
 
-@jit
-def _add_blkT(core, s, t, M, alpha):
-    """core[block s, block t] += alpha M^T."""
+@inl
+def _add_blk_both(core, s, t, M, alpha):
+    """core[block s, block t] += alpha M and core[block t, block s] += alpha M^T."""
     for i in range(3):
         for j in range(3):
-            core[3 * s + i, 3 * t + j] += alpha * M[j, i]
+            v = alpha * M[i, j]
+            core[3 * s + i, 3 * t + j] += v
+            core[3 * t + j, 3 * s + i] += v
 
 
 # ----------------------------------------------------------------------------------------------------------
-# Tangent-operator derivatives with precomputed coefficients (formulas of flexbody.lie.kernels; the
-# coefficients of |phi| are computed once per point instead of once per call)
+# Tangent-operator derivatives (formulas of flexbody.lie.kernels, coefficients passed in)
 # co = (a1, a2, a3, a4, c2, c3, c4, e2, e3)
 # ----------------------------------------------------------------------------------------------------------
 
 
-@jit
-def _dtan_into(p0, p1, p2, b, co, out):
-    """out = X with (D T(phi)[v]) b = X v at phi = (p0, p1, p2) (kernels.d_tangent_into)."""
-    a2, a3, c2, c3 = co[1], co[2], co[4], co[5]
-    r0 = p1 * b[2] - p2 * b[1]
-    r1 = p2 * b[0] - p0 * b[2]
-    r2 = p0 * b[1] - p1 * b[0]
+@inl
+def _dtan_to(p0, p1, p2, b0, b1, b2, co, out):
+    """out = X with (D T(phi)[v]) b = X v (kernels.d_tangent_into)."""
+    a2 = co[1]
+    a3 = co[2]
+    c2 = co[4]
+    c3 = co[5]
+    r0 = p1 * b2 - p2 * b1
+    r1 = p2 * b0 - p0 * b2
+    r2 = p0 * b1 - p1 * b0
     q0 = p1 * r2 - p2 * r1
     q1 = p2 * r0 - p0 * r2
     q2 = p0 * r1 - p1 * r0
-    pb = p0 * b[0] + p1 * b[1] + p2 * b[2]
     # X = a3 (phi.b) I + hat(a2 b - a3 r) + (c3 q - c2 r - a3 b) phi^T
-    h0 = a2 * b[0] - a3 * r0
-    h1 = a2 * b[1] - a3 * r1
-    h2 = a2 * b[2] - a3 * r2
-    w0 = c3 * q0 - c2 * r0 - a3 * b[0]
-    w1 = c3 * q1 - c2 * r1 - a3 * b[1]
-    w2 = c3 * q2 - c2 * r2 - a3 * b[2]
-    dg = a3 * pb
+    h0 = a2 * b0 - a3 * r0
+    h1 = a2 * b1 - a3 * r1
+    h2 = a2 * b2 - a3 * r2
+    w0 = c3 * q0 - c2 * r0 - a3 * b0
+    w1 = c3 * q1 - c2 * r1 - a3 * b1
+    w2 = c3 * q2 - c2 * r2 - a3 * b2
+    dg = a3 * (p0 * b0 + p1 * b1 + p2 * b2)
     out[0, 0] = dg + w0 * p0
     out[0, 1] = -h2 + w0 * p1
     out[0, 2] = h1 + w0 * p2
@@ -144,8 +199,8 @@ def _dtan_into(p0, p1, p2, b, co, out):
     out[2, 2] = dg + w2 * p2
 
 
-@jit
-def _dtan_inv_into(p0, p1, p2, b0, b1, b2, a4, c4, out):
+@inl
+def _dtan_inv_to(p0, p1, p2, b0, b1, b2, a4, c4, out):
     """out = X with (D T^-1(phi)[v]) b = X v (kernels.d_tangent_inv_into)."""
     r0 = p1 * b2 - p2 * b1
     r1 = p2 * b0 - p0 * b2
@@ -153,7 +208,6 @@ def _dtan_inv_into(p0, p1, p2, b0, b1, b2, a4, c4, out):
     q0 = p1 * r2 - p2 * r1
     q1 = p2 * r0 - p0 * r2
     q2 = p0 * r1 - p1 * r0
-    pb = p0 * b0 + p1 * b1 + p2 * b2
     # X = a4 (phi.b) I + hat(-b/2 - a4 r) + (c4 q - a4 b) phi^T
     h0 = -0.5 * b0 - a4 * r0
     h1 = -0.5 * b1 - a4 * r1
@@ -161,7 +215,7 @@ def _dtan_inv_into(p0, p1, p2, b0, b1, b2, a4, c4, out):
     w0 = c4 * q0 - a4 * b0
     w1 = c4 * q1 - a4 * b1
     w2 = c4 * q2 - a4 * b2
-    dg = a4 * pb
+    dg = a4 * (p0 * b0 + p1 * b1 + p2 * b2)
     out[0, 0] = dg + w0 * p0
     out[0, 1] = -h2 + w0 * p1
     out[0, 2] = h1 + w0 * p2
@@ -173,530 +227,537 @@ def _dtan_inv_into(p0, p1, p2, b0, b1, b2, a4, c4, out):
     out[2, 2] = dg + w2 * p2
 
 
-@jit
-def _d2tan_add(phi, a, b, co, core, s, t):
-    """core[block s, block t] += Y, a^T (D^2 T(phi)[v, w]) b = v^T Y w (kernels.d2_tangent_into)."""
-    a3, c2, c3, e2, e3 = co[2], co[4], co[5], co[7], co[8]
-    p0, p1, p2 = phi[0], phi[1], phi[2]
-    r0 = p1 * b[2] - p2 * b[1]
-    r1 = p2 * b[0] - p0 * b[2]
-    r2 = p0 * b[1] - p1 * b[0]
+@inl
+def _d2tan_to(p0, p1, p2, a0, a1, a2_, b0, b1, b2, co, out):
+    """out = Y (symmetric), a^T (D^2 T(phi)[v, w]) b = v^T Y w (kernels.d2_tangent_into)."""
+    a3 = co[2]
+    c2 = co[4]
+    c3 = co[5]
+    e2 = co[7]
+    e3 = co[8]
+    r0 = p1 * b2 - p2 * b1
+    r1 = p2 * b0 - p0 * b2
+    r2 = p0 * b1 - p1 * b0
     q0 = p1 * r2 - p2 * r1
     q1 = p2 * r0 - p0 * r2
     q2 = p0 * r1 - p1 * r0
-    m0 = a[1] * b[2] - a[2] * b[1]
-    m1 = a[2] * b[0] - a[0] * b[2]
-    m2 = a[0] * b[1] - a[1] * b[0]
+    m0 = a1 * b2 - a2_ * b1
+    m1 = a2_ * b0 - a0 * b2
+    m2 = a0 * b1 - a1 * b0
     # u = a x r + b x (phi x a)
-    pa0 = p1 * a[2] - p2 * a[1]
-    pa1 = p2 * a[0] - p0 * a[2]
-    pa2 = p0 * a[1] - p1 * a[0]
-    u0 = (a[1] * r2 - a[2] * r1) + (b[1] * pa2 - b[2] * pa1)
-    u1 = (a[2] * r0 - a[0] * r2) + (b[2] * pa0 - b[0] * pa2)
-    u2 = (a[0] * r1 - a[1] * r0) + (b[0] * pa1 - b[1] * pa0)
-    ar = a[0] * r0 + a[1] * r1 + a[2] * r2
-    aq = a[0] * q0 + a[1] * q1 + a[2] * q2
-    ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    pa0 = p1 * a2_ - p2 * a1
+    pa1 = p2 * a0 - p0 * a2_
+    pa2 = p0 * a1 - p1 * a0
+    u0 = (a1 * r2 - a2_ * r1) + (b1 * pa2 - b2 * pa1)
+    u1 = (a2_ * r0 - a0 * r2) + (b2 * pa0 - b0 * pa2)
+    u2 = (a0 * r1 - a1 * r0) + (b0 * pa1 - b1 * pa0)
+    ar = a0 * r0 + a1 * r1 + a2_ * r2
+    aq = a0 * q0 + a1 * q1 + a2_ * q2
+    ab = a0 * b0 + a1 * b1 + a2_ * b2
     dg = c3 * aq - c2 * ar - 2.0 * a3 * ab
     sc = e3 * aq - e2 * ar
-    pv = (p0, p1, p2)
-    mv = (m0, m1, m2)
-    uv = (u0, u1, u2)
-    for i in range(3):
-        for j in range(3):
-            y = (c2 * (mv[i] * pv[j] + pv[i] * mv[j]) - c3 * (uv[i] * pv[j] + pv[i] * uv[j])
-                 + a3 * (a[i] * b[j] + b[i] * a[j]) + sc * pv[i] * pv[j])
-            if i == j:
-                y += dg
-            core[3 * s + i, 3 * t + j] += y
+    # row i: c2 (m_i phi_j + phi_i m_j) - c3 (u_i phi_j + phi_i u_j) + a3 (a_i b_j + b_i a_j) + sc phi_i phi_j
+    out[0, 0] = dg + 2.0 * (c2 * m0 * p0 - c3 * u0 * p0 + a3 * a0 * b0) + sc * p0 * p0
+    out[1, 1] = dg + 2.0 * (c2 * m1 * p1 - c3 * u1 * p1 + a3 * a1 * b1) + sc * p1 * p1
+    out[2, 2] = dg + 2.0 * (c2 * m2 * p2 - c3 * u2 * p2 + a3 * a2_ * b2) + sc * p2 * p2
+    y01 = c2 * (m0 * p1 + p0 * m1) - c3 * (u0 * p1 + p0 * u1) + a3 * (a0 * b1 + b0 * a1) + sc * p0 * p1
+    y02 = c2 * (m0 * p2 + p0 * m2) - c3 * (u0 * p2 + p0 * u2) + a3 * (a0 * b2 + b0 * a2_) + sc * p0 * p2
+    y12 = c2 * (m1 * p2 + p1 * m2) - c3 * (u1 * p2 + p1 * u2) + a3 * (a1 * b2 + b1 * a2_) + sc * p1 * p2
+    out[0, 1] = y01
+    out[1, 0] = y01
+    out[0, 2] = y02
+    out[2, 0] = y02
+    out[1, 2] = y12
+    out[2, 1] = y12
 
 
 # ----------------------------------------------------------------------------------------------------------
-# Element setup: nodal relative rotations
+# Coefficients: kernels.coefficients above the switch, the same series (fused Horner) below
 # ----------------------------------------------------------------------------------------------------------
 
 
 @jit
-def _node_setup(fr, dn, Ti, nco):
-    """d_I = log(R_0^T R_I), Ti[I] = T^-1(d_I) (T^-1(-d_I) = Ti[I]^T), coefficients of |d_I|."""
-    R0 = fr[0]
+def _point_coefficients(used, Pd, Pco):
+    """Pco[p] = (a1, a2, a3, a4, c2, c3, c4, e2, e3) at |d_p| for the used points (a4, c4 unused: 0)."""
+    for k in range(used.shape[0]):
+        p = used[k]
+        n = math.sqrt(Pd[p, 0] * Pd[p, 0] + Pd[p, 1] * Pd[p, 1] + Pd[p, 2] * Pd[p, 2])
+        if n < _SWITCH:
+            x = n * n
+            a1 = 0.0
+            a2 = 0.0
+            a3 = 0.0
+            c2 = 0.0
+            c3 = 0.0
+            e2 = 0.0
+            e3 = 0.0
+            for j in range(_NENT - 1, -1, -1):
+                a1 = a1 * x + _SA1[j]
+                a2 = a2 * x + _SA2[j]
+                a3 = a3 * x + _SA3[j]
+                c2 = c2 * x + _SC2[j]
+                c3 = c3 * x + _SC3[j]
+                e2 = e2 * x + _SE2[j]
+                e3 = e3 * x + _SE3[j]
+            Pco[p, 0] = a1
+            Pco[p, 1] = a2
+            Pco[p, 2] = a3
+            Pco[p, 3] = 0.0
+            Pco[p, 4] = c2
+            Pco[p, 5] = c3
+            Pco[p, 6] = 0.0
+            Pco[p, 7] = e2
+            Pco[p, 8] = e3
+        else:
+            cf = lk.coefficients(n)
+            for j in range(9):
+                Pco[p, j] = cf[j]
+
+
+@jit
+def _node_setup(fr, dn, Ti, ninv, M):
+    """d_I = log(R_0^T R_I), Ti[I] = T^-1(d_I) (so T^-1(-d_I) = Ti[I]^T), ninv[I] = (a4, c4) of |d_I|."""
     for c in range(3):
         dn[0, c] = 0.0
         for k in range(3):
             Ti[0, c, k] = 1.0 if c == k else 0.0
+    ninv[0, 0] = 0.0
+    ninv[0, 1] = 0.0
     for i in range(1, 6):
-        Ri = fr[i]
-        M = Ti[i]  # scratch for R_0^T R_i
         for r in range(3):
             for c in range(3):
-                M[r, c] = R0[0, r] * Ri[0, c] + R0[1, r] * Ri[1, c] + R0[2, r] * Ri[2, c]
+                M[r, c] = fr[0, 0, r] * fr[i, 0, c] + fr[0, 1, r] * fr[i, 1, c] + fr[0, 2, r] * fr[i, 2, c]
         lk.log_into(M, dn[i])
-        d0, d1, d2 = dn[i, 0], dn[i, 1], dn[i, 2]
+        d0 = dn[i, 0]
+        d1 = dn[i, 1]
+        d2 = dn[i, 2]
         pp = d0 * d0 + d1 * d1 + d2 * d2
-        co = lk.coefficients(math.sqrt(pp))
-        for k in range(9):
-            nco[i, k] = co[k]
-        a4 = co[3]
+        n = math.sqrt(pp)
+        if n < _SWITCH:
+            x = pp
+            a4 = 0.0
+            c4 = 0.0
+            for j in range(_NCOT - 1, -1, -1):
+                a4 = a4 * x + _SA4[j]
+                c4 = c4 * x + _SC4[j]
+        else:
+            cf = lk.coefficients(n)
+            a4 = cf[3]
+            c4 = cf[6]
+        ninv[i, 0] = a4
+        ninv[i, 1] = c4
         # T^-1 = (1 - a4 p^2) I + hat(d)/2 + a4 d d^T
-        dv = (d0, d1, d2)
+        dg = 1.0 - a4 * pp
+        Ti[i, 0, 0] = dg + a4 * d0 * d0
+        Ti[i, 1, 1] = dg + a4 * d1 * d1
+        Ti[i, 2, 2] = dg + a4 * d2 * d2
+        Ti[i, 0, 1] = a4 * d0 * d1 - 0.5 * d2
+        Ti[i, 1, 0] = a4 * d0 * d1 + 0.5 * d2
+        Ti[i, 0, 2] = a4 * d0 * d2 + 0.5 * d1
+        Ti[i, 2, 0] = a4 * d0 * d2 - 0.5 * d1
+        Ti[i, 1, 2] = a4 * d1 * d2 - 0.5 * d0
+        Ti[i, 2, 1] = a4 * d1 * d2 + 0.5 * d0
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Point kinematics (per point data stored by point index)
+# ----------------------------------------------------------------------------------------------------------
+
+
+@jit
+def _load_element(e, x_el, fr_el, x, fr):
+    for i in range(6):
+        for r in range(3):
+            x[i, r] = x_el[e, i, r]
+            for c in range(3):
+                fr[i, r, c] = fr_el[e, i, r, c]
+
+
+@jit
+def _interpolate_points(used, dn, Pd, Pda):
+    """d = sum N_I d_I and d_,a at the used points."""
+    for k in range(used.shape[0]):
+        p = used[k]
+        for c in range(3):
+            s = 0.0
+            s0 = 0.0
+            s1 = 0.0
+            for i in range(1, 6):
+                s += _EN[p, i] * dn[i, c]
+                s0 += _EDN[p, 0, i] * dn[i, c]
+                s1 += _EDN[p, 1, i] * dn[i, c]
+            Pd[p, c] = s
+            Pda[p, 0, c] = s0
+            Pda[p, 1, c] = s1
+
+
+@jit
+def _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, with_x):
+    """Q = exp(d), T(d), R = R_0 Q, F = [f_ru, f_su, f_rw, f_sw], X_a = DT(d)[.] d_,a at the used points."""
+    for k in range(used.shape[0]):
+        p = used[k]
+        d0 = Pd[p, 0]
+        d1 = Pd[p, 1]
+        d2 = Pd[p, 2]
+        pp = d0 * d0 + d1 * d1 + d2 * d2
+        a1 = Pco[p, 0]
+        a2 = Pco[p, 1]
+        a3 = Pco[p, 2]
+        Q = PQ[p]
+        T = PT[p]
+        R = PR[p]
+        # Q = cos I + a1 hat(d) + a2 d d^T (cos = 1 - a2 p^2);  T = (1 - a3 p^2) I - a2 hat(d) + a3 d d^T
+        cq = 1.0 - a2 * pp
+        ct = 1.0 - a3 * pp
         for r in range(3):
             for c in range(3):
-                M[r, c] = a4 * dv[r] * dv[c]
-            M[r, r] += 1.0 - a4 * pp
-        M[0, 1] -= 0.5 * d2
-        M[0, 2] += 0.5 * d1
-        M[1, 0] += 0.5 * d2
-        M[1, 2] -= 0.5 * d0
-        M[2, 0] -= 0.5 * d1
-        M[2, 1] += 0.5 * d0
-
-
-# ----------------------------------------------------------------------------------------------------------
-# Point kinematics
-# ----------------------------------------------------------------------------------------------------------
-
-
-@jit
-def _point_kinematics(x, fr, dn, N, dN, d, da, co, Q, T, R, F, X, with_x):
-    """d, d_,a, coefficients, Q = exp(d), T(d), R = R_0 Q, F = [f_ru, f_su, f_rw, f_sw], X_a = DT(d)[.] d_,a."""
-    for c in range(3):
-        s = 0.0
-        s0 = 0.0
-        s1 = 0.0
-        for i in range(1, 6):
-            s += N[i] * dn[i, c]
-            s0 += dN[0, i] * dn[i, c]
-            s1 += dN[1, i] * dn[i, c]
-        d[c] = s
-        da[0, c] = s0
-        da[1, c] = s1
-    d0, d1, d2 = d[0], d[1], d[2]
-    pp = d0 * d0 + d1 * d1 + d2 * d2
-    cf = lk.coefficients(math.sqrt(pp))
-    for k in range(9):
-        co[k] = cf[k]
-    a1, a2, a3 = cf[0], cf[1], cf[2]
-    dv = (d0, d1, d2)
-    # Q = cos I + a1 hat(d) + a2 d d^T, cos = 1 - a2 p^2;  T = (1 - a3 p^2) I - a2 hat(d) + a3 d d^T
-    cq = 1.0 - a2 * pp
-    ct = 1.0 - a3 * pp
-    for r in range(3):
-        for c in range(3):
-            Q[r, c] = a2 * dv[r] * dv[c]
-            T[r, c] = a3 * dv[r] * dv[c]
-        Q[r, r] += cq
-        T[r, r] += ct
-    Q[0, 1] -= a1 * d2
-    Q[0, 2] += a1 * d1
-    Q[1, 0] += a1 * d2
-    Q[1, 2] -= a1 * d0
-    Q[2, 0] -= a1 * d1
-    Q[2, 1] += a1 * d0
-    T[0, 1] += a2 * d2
-    T[0, 2] -= a2 * d1
-    T[1, 0] -= a2 * d2
-    T[1, 2] += a2 * d0
-    T[2, 0] += a2 * d1
-    T[2, 1] -= a2 * d0
-    _mm(fr[0], Q, R)
-    # f_au = R^T x_,a ;  f_aw = T d_,a
-    for a in range(2):
-        xa0 = 0.0
-        xa1 = 0.0
-        xa2 = 0.0
-        for i in range(6):
-            w = dN[a, i]
-            xa0 += w * x[i, 0]
-            xa1 += w * x[i, 1]
-            xa2 += w * x[i, 2]
-        for c in range(3):
-            F[a, c] = R[0, c] * xa0 + R[1, c] * xa1 + R[2, c] * xa2
-            F[2 + a, c] = T[c, 0] * da[a, 0] + T[c, 1] * da[a, 1] + T[c, 2] * da[a, 2]
-    if with_x:
-        _dtan_into(d0, d1, d2, da[0], co, X[0])
-        _dtan_into(d0, d1, d2, da[1], co, X[1])
+                Q[r, c] = a2 * Pd[p, r] * Pd[p, c]
+                T[r, c] = a3 * Pd[p, r] * Pd[p, c]
+            Q[r, r] += cq
+            T[r, r] += ct
+        Q[0, 1] -= a1 * d2
+        Q[0, 2] += a1 * d1
+        Q[1, 0] += a1 * d2
+        Q[1, 2] -= a1 * d0
+        Q[2, 0] -= a1 * d1
+        Q[2, 1] += a1 * d0
+        T[0, 1] += a2 * d2
+        T[0, 2] -= a2 * d1
+        T[1, 0] -= a2 * d2
+        T[1, 2] += a2 * d0
+        T[2, 0] += a2 * d1
+        T[2, 1] -= a2 * d0
+        for r in range(3):
+            for c in range(3):
+                R[r, c] = fr[0, r, 0] * Q[0, c] + fr[0, r, 1] * Q[1, c] + fr[0, r, 2] * Q[2, c]
+        # f_au = R^T x_,a ;  f_aw = T d_,a
+        for a in range(2):
+            xa0 = 0.0
+            xa1 = 0.0
+            xa2 = 0.0
+            for i in range(6):
+                w = _EDN[p, a, i]
+                xa0 += w * x[i, 0]
+                xa1 += w * x[i, 1]
+                xa2 += w * x[i, 2]
+            for c in range(3):
+                PF[p, a, c] = R[0, c] * xa0 + R[1, c] * xa1 + R[2, c] * xa2
+                PF[p, 2 + a, c] = T[c, 0] * Pda[p, a, 0] + T[c, 1] * Pda[p, a, 1] + T[c, 2] * Pda[p, a, 2]
+        if with_x:
+            co = Pco[p]
+            _dtan_to(d0, d1, d2, Pda[p, 0, 0], Pda[p, 0, 1], Pda[p, 0, 2], co, PX[p, 0])
+            _dtan_to(d0, d1, d2, Pda[p, 1, 0], Pda[p, 1, 1], Pda[p, 1, 2], co, PX[p, 1])
 
 
 @jit
-def _covariant_strains(F, e_ref, out):
-    """out = covariant_strains(F) - e_ref (kinematics.covariant_strains)."""
-    f0 = F[0]
-    f1 = F[1]
-    w0 = F[2]
-    w1 = F[3]
-    out[0] = 0.5 * (f0[0] * f0[0] + f0[1] * f0[1] + f0[2] * f0[2]) - e_ref[0]
-    out[1] = 0.5 * (f1[0] * f1[0] + f1[1] * f1[1] + f1[2] * f1[2]) - e_ref[1]
-    out[2] = 0.5 * (f0[0] * f1[0] + f0[1] * f1[1] + f0[2] * f1[2]) - e_ref[2]
-    # a . hat(e3) b = a1 b0 - a0 b1
-    out[3] = -(f0[1] * w0[0] - f0[0] * w0[1]) - e_ref[3]
-    out[4] = -(f1[1] * w1[0] - f1[0] * w1[1]) - e_ref[4]
-    out[5] = -0.5 * ((f0[1] * w1[0] - f0[0] * w1[1]) + (f1[1] * w0[0] - f1[0] * w0[1])) - e_ref[5]
-    out[6] = f0[2] - e_ref[6]
-    out[7] = f1[2] - e_ref[7]
+def _strains_points(e, used, e_ref, PF, Pe):
+    """Pe[p] = covariant_strains(F_p) - e_ref[e, p] (kinematics.covariant_strains)."""
+    for k in range(used.shape[0]):
+        p = used[k]
+        F = PF[p]
+        # a . hat(e3) b = a1 b0 - a0 b1
+        Pe[p, 0] = 0.5 * (F[0, 0] * F[0, 0] + F[0, 1] * F[0, 1] + F[0, 2] * F[0, 2]) - e_ref[e, p, 0]
+        Pe[p, 1] = 0.5 * (F[1, 0] * F[1, 0] + F[1, 1] * F[1, 1] + F[1, 2] * F[1, 2]) - e_ref[e, p, 1]
+        Pe[p, 2] = 0.5 * (F[0, 0] * F[1, 0] + F[0, 1] * F[1, 1] + F[0, 2] * F[1, 2]) - e_ref[e, p, 2]
+        Pe[p, 3] = -(F[0, 1] * F[2, 0] - F[0, 0] * F[2, 1]) - e_ref[e, p, 3]
+        Pe[p, 4] = -(F[1, 1] * F[3, 0] - F[1, 0] * F[3, 1]) - e_ref[e, p, 4]
+        Pe[p, 5] = -0.5 * ((F[0, 1] * F[3, 0] - F[0, 0] * F[3, 1])
+                           + (F[1, 1] * F[2, 0] - F[1, 0] * F[2, 1])) - e_ref[e, p, 5]
+        Pe[p, 6] = F[0, 2] - e_ref[e, p, 6]
+        Pe[p, 7] = F[1, 2] - e_ref[e, p, 7]
 
 
 @jit
+def _gauss_strains(e, to_cart, nz_g, nz_i, nz_p, nz_j, nz_v, Pe, cov, out):
+    """Assumed covariant strains at the Gauss points and their Cartesian components out[e] (7, 8)."""
+    for gg in range(N_GAUSS):
+        for i in range(8):
+            cov[gg, i] = 0.0
+    for q in range(nz_g.shape[0]):
+        cov[nz_g[q], nz_i[q]] += nz_v[q] * Pe[nz_p[q], nz_j[q]]
+    for gg in range(N_GAUSS):
+        for r in range(8):
+            acc = 0.0
+            for c in range(8):
+                acc += to_cart[e, gg, r, c] * cov[gg, c]
+            out[e, gg, r] = acc
+
+
+@jit
+def _stress_weights(e, used, to_cart, weights, C, Ch, use_ch, nz_g, nz_i, nz_p, nz_j, nz_v, Pe, cov, st, v16, Ps):
+    """Covariant stress weights Ps[p] = sum_g w_g (T_g A_g)^T C T_g A_g e at the used points.
+
+    With use_ch the covariant sections Ch_g = w_g T_g^T C T_g (already formed for the tangent) are used.
+    """
+    for gg in range(N_GAUSS):
+        for i in range(8):
+            cov[gg, i] = 0.0
+    for q in range(nz_g.shape[0]):
+        cov[nz_g[q], nz_i[q]] += nz_v[q] * Pe[nz_p[q], nz_j[q]]
+    for gg in range(N_GAUSS):
+        if use_ch:
+            for r in range(8):
+                acc = 0.0
+                for c in range(8):
+                    acc += Ch[gg, r, c] * cov[gg, c]
+                st[gg, r] = acc
+            continue
+        w = weights[e, gg]
+        for r in range(8):
+            acc = 0.0
+            for c in range(8):
+                acc += to_cart[e, gg, r, c] * cov[gg, c]
+            v16[r] = acc
+        for r in range(8):
+            acc = 0.0
+            for c in range(8):
+                acc += C[r, c] * v16[c]
+            v16[8 + r] = w * acc
+        for c in range(8):
+            acc = 0.0
+            for r in range(8):
+                acc += to_cart[e, gg, r, c] * v16[8 + r]
+            st[gg, c] = acc
+    for k in range(used.shape[0]):
+        p = used[k]
+        for j in range(8):
+            Ps[p, j] = 0.0
+    for q in range(nz_g.shape[0]):
+        Ps[nz_p[q], nz_j[q]] += nz_v[q] * st[nz_g[q], nz_i[q]]
+
+
+@inl
 def _strain_gradient_T(F, s, g):
     """g = D^T s (12): the weights [a_r, a_s, b_r, b_s] of the strain measures (kinematics.strain_gradient)."""
-    f0 = F[0]
-    f1 = F[1]
-    w0 = F[2]
-    w1 = F[3]
     h2 = 0.5 * s[2]
     h5 = 0.5 * s[5]
     # hat(e3) v = (-v1, v0, 0)
     for c in range(3):
-        g[c] = s[0] * f0[c] + h2 * f1[c]
-        g[3 + c] = s[1] * f1[c] + h2 * f0[c]
-    # -s3 E w0 - s5/2 E w1 on a_r ; -s4 E w1 - s5/2 E w0 on a_s
-    g[0] += s[3] * w0[1] + h5 * w1[1]
-    g[1] -= s[3] * w0[0] + h5 * w1[0]
-    g[3] += s[4] * w1[1] + h5 * w0[1]
-    g[4] -= s[4] * w1[0] + h5 * w0[0]
+        g[c] = s[0] * F[0, c] + h2 * F[1, c]
+        g[3 + c] = s[1] * F[1, c] + h2 * F[0, c]
+    # -s3 E f_rw - s5/2 E f_sw on a_r ; -s4 E f_sw - s5/2 E f_rw on a_s
+    g[0] += s[3] * F[2, 1] + h5 * F[3, 1]
+    g[1] -= s[3] * F[2, 0] + h5 * F[3, 0]
+    g[3] += s[4] * F[3, 1] + h5 * F[2, 1]
+    g[4] -= s[4] * F[3, 0] + h5 * F[2, 0]
     g[2] += s[6]
     g[5] += s[7]
-    # b_r = s3 E f0 + s5/2 E f1 ; b_s = s4 E f1 + s5/2 E f0
-    g[6] = -(s[3] * f0[1] + h5 * f1[1])
-    g[7] = s[3] * f0[0] + h5 * f1[0]
+    # b_r = s3 E f_ru + s5/2 E f_su ; b_s = s4 E f_su + s5/2 E f_ru
+    g[6] = -(s[3] * F[0, 1] + h5 * F[1, 1])
+    g[7] = s[3] * F[0, 0] + h5 * F[1, 0]
     g[8] = 0.0
-    g[9] = -(s[4] * f1[1] + h5 * f0[1])
-    g[10] = s[4] * f1[0] + h5 * f0[0]
+    g[9] = -(s[4] * F[1, 1] + h5 * F[0, 1])
+    g[10] = s[4] * F[1, 0] + h5 * F[0, 0]
     g[11] = 0.0
 
 
-@jit
-def _strain_gradient_row(F, k, g):
-    """g = row k of D (12)."""
-    for c in range(12):
-        g[c] = 0.0
-    f0 = F[0]
-    f1 = F[1]
-    w0 = F[2]
-    w1 = F[3]
+@inl
+def _add_strain_gradient_row(F, k, v, G2, row):
+    """G2[row] (12) += v * (row k of D), D = de/dF (8 x 12)."""
     if k == 0:
         for c in range(3):
-            g[c] = f0[c]
+            G2[row, c] += v * F[0, c]
     elif k == 1:
         for c in range(3):
-            g[3 + c] = f1[c]
+            G2[row, 3 + c] += v * F[1, c]
     elif k == 2:
         for c in range(3):
-            g[c] = 0.5 * f1[c]
-            g[3 + c] = 0.5 * f0[c]
+            G2[row, c] += 0.5 * v * F[1, c]
+            G2[row, 3 + c] += 0.5 * v * F[0, c]
     elif k == 3:
-        g[0] = w0[1]
-        g[1] = -w0[0]
-        g[6] = -f0[1]
-        g[7] = f0[0]
+        G2[row, 0] += v * F[2, 1]
+        G2[row, 1] -= v * F[2, 0]
+        G2[row, 6] -= v * F[0, 1]
+        G2[row, 7] += v * F[0, 0]
     elif k == 4:
-        g[3] = w1[1]
-        g[4] = -w1[0]
-        g[9] = -f1[1]
-        g[10] = f1[0]
+        G2[row, 3] += v * F[3, 1]
+        G2[row, 4] -= v * F[3, 0]
+        G2[row, 9] -= v * F[1, 1]
+        G2[row, 10] += v * F[1, 0]
     elif k == 5:
-        g[0] = 0.5 * w1[1]
-        g[1] = -0.5 * w1[0]
-        g[3] = 0.5 * w0[1]
-        g[4] = -0.5 * w0[0]
-        g[6] = -0.5 * f1[1]
-        g[7] = 0.5 * f1[0]
-        g[9] = -0.5 * f0[1]
-        g[10] = 0.5 * f0[0]
+        h = 0.5 * v
+        G2[row, 0] += h * F[3, 1]
+        G2[row, 1] -= h * F[3, 0]
+        G2[row, 3] += h * F[2, 1]
+        G2[row, 4] -= h * F[2, 0]
+        G2[row, 6] -= h * F[1, 1]
+        G2[row, 7] += h * F[1, 0]
+        G2[row, 9] -= h * F[0, 1]
+        G2[row, 10] += h * F[0, 0]
     elif k == 6:
-        g[2] = 1.0
+        G2[row, 2] += v
     else:
-        g[5] = 1.0
+        G2[row, 5] += v
 
 
-@jit
-def _GT_times(g, F, Q, T, R, X, out):
-    """out (18) = G_xi^T g: the slot components of the variation weighted by g = [a_r, a_s, b_r, b_s].
+@inl
+def _GT_times(G2, grow, F, Q, T, R, X0, X1, out, orow):
+    """out[orow] (18) = G_xi^T g, g = G2[grow] = [a_r, a_s, b_r, b_s] (12) weights of the strain measures.
 
     G_xi rows f_au: [U_a: R^T, V0: hat(f_au) Q^T, V: hat(f_au) T]; rows f_aw: [V: X_a, W_a: T].
     """
+    g0 = G2[grow, 0]
+    g1 = G2[grow, 1]
+    g2 = G2[grow, 2]
+    g3 = G2[grow, 3]
+    g4 = G2[grow, 4]
+    g5 = G2[grow, 5]
+    g6 = G2[grow, 6]
+    g7 = G2[grow, 7]
+    g8 = G2[grow, 8]
+    g9 = G2[grow, 9]
+    g10 = G2[grow, 10]
+    g11 = G2[grow, 11]
     # c = a_r x f_ru + a_s x f_su
-    c0 = (g[1] * F[0, 2] - g[2] * F[0, 1]) + (g[4] * F[1, 2] - g[5] * F[1, 1])
-    c1 = (g[2] * F[0, 0] - g[0] * F[0, 2]) + (g[5] * F[1, 0] - g[3] * F[1, 2])
-    c2 = (g[0] * F[0, 1] - g[1] * F[0, 0]) + (g[3] * F[1, 1] - g[4] * F[1, 0])
+    c0 = (g1 * F[0, 2] - g2 * F[0, 1]) + (g4 * F[1, 2] - g5 * F[1, 1])
+    c1 = (g2 * F[0, 0] - g0 * F[0, 2]) + (g5 * F[1, 0] - g3 * F[1, 2])
+    c2 = (g0 * F[0, 1] - g1 * F[0, 0]) + (g3 * F[1, 1] - g4 * F[1, 0])
     for r in range(3):
-        out[r] = R[r, 0] * g[0] + R[r, 1] * g[1] + R[r, 2] * g[2]
-        out[3 + r] = R[r, 0] * g[3] + R[r, 1] * g[4] + R[r, 2] * g[5]
-        out[6 + r] = Q[r, 0] * c0 + Q[r, 1] * c1 + Q[r, 2] * c2
-        out[9 + r] = (T[0, r] * c0 + T[1, r] * c1 + T[2, r] * c2
-                      + X[0, 0, r] * g[6] + X[0, 1, r] * g[7] + X[0, 2, r] * g[8]
-                      + X[1, 0, r] * g[9] + X[1, 1, r] * g[10] + X[1, 2, r] * g[11])
-        out[12 + r] = T[0, r] * g[6] + T[1, r] * g[7] + T[2, r] * g[8]
-        out[15 + r] = T[0, r] * g[9] + T[1, r] * g[10] + T[2, r] * g[11]
+        out[orow, r] = R[r, 0] * g0 + R[r, 1] * g1 + R[r, 2] * g2
+        out[orow, 3 + r] = R[r, 0] * g3 + R[r, 1] * g4 + R[r, 2] * g5
+        out[orow, 6 + r] = Q[r, 0] * c0 + Q[r, 1] * c1 + Q[r, 2] * c2
+        out[orow, 9 + r] = (T[0, r] * c0 + T[1, r] * c1 + T[2, r] * c2
+                            + X0[0, r] * g6 + X0[1, r] * g7 + X0[2, r] * g8
+                            + X1[0, r] * g9 + X1[1, r] * g10 + X1[2, r] * g11)
+        out[orow, 12 + r] = T[0, r] * g6 + T[1, r] * g7 + T[2, r] * g8
+        out[orow, 15 + r] = T[0, r] * g9 + T[1, r] * g10 + T[2, r] * g11
+
+
+@inl
+def _load_point(p, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s):
+    """Copy the data of point p into whole small arrays (no array views inside the point loops)."""
+    for c in range(3):
+        d[c] = Pd[p, c]
+        da[0, c] = Pda[p, 0, c]
+        da[1, c] = Pda[p, 1, c]
+        for k in range(3):
+            Q[c, k] = PQ[p, c, k]
+            T[c, k] = PT[p, c, k]
+            R[c, k] = PR[p, c, k]
+            X0[c, k] = PX[p, 0, c, k]
+            X1[c, k] = PX[p, 1, c, k]
+    for k in range(4):
+        for c in range(3):
+            F[k, c] = PF[p, k, c]
+    for k in range(9):
+        co[k] = Pco[p, k]
+    for k in range(8):
+        s[k] = Ps[p, k]
 
 
 # ----------------------------------------------------------------------------------------------------------
-# Slot expansion xi -> z (Pi) and the change of variables z -> h (P)
+# Slot expansion xi -> z (Pi); z component-major: dx_I[c] at 6c + I, rotations[c] at 18 + 6c + I
 # ----------------------------------------------------------------------------------------------------------
 
 
-@jit
-def _expand_vec(v, N, dN, out):
-    """out (36) += Pi^T v (v in slots, 18)."""
-    for i in range(6):
-        a0 = dN[0, i]
-        a1 = dN[1, i]
-        for c in range(3):
-            out[6 * i + c] += a0 * v[c] + a1 * v[3 + c]
+@inl
+def _expand_vec(V, vrow, p, out, orow):
+    """out[orow] (z, NZ) += Pi_p^T V[vrow] (18 slot components)."""
+    n8 = _u(out.shape[1]) // _u(6)
     for c in range(3):
-        out[3 + c] += v[6 + c]
-    for i in range(1, 6):
-        n = N[i]
-        a0 = dN[0, i]
-        a1 = dN[1, i]
-        for c in range(3):
-            out[6 * i + 3 + c] += n * v[9 + c] + a0 * v[12 + c] + a1 * v[15 + c]
+        u0 = V[vrow, c]
+        u1 = V[vrow, 3 + c]
+        r0 = V[vrow, 6 + c]
+        rv = V[vrow, 9 + c]
+        w0 = V[vrow, 12 + c]
+        w1 = V[vrow, 15 + c]
+        ot = 8 * c
+        orot = _ZR + 8 * c
+        for i in range(_u(0), n8):
+            out[orow, ot + i] += _PI8[p, 0, i] * u0 + _PI8[p, 1, i] * u1
+            out[orow, orot + i] += (_PI8[p, 2, i] * r0 + _PI8[p, 3, i] * rv + _PI8[p, 4, i] * w0
+                                    + _PI8[p, 5, i] * w1)
 
 
 @jit
-def _expand_core(core, ns, N, dN, Y, Kz):
-    """Kz (36 x 36) += Pi^T core Pi for the first ns slots of the 18 x 18 core."""
-    nr = 3 * ns
-    # stage 1: Y = core Pi (nr x 36)
-    for r in range(nr):
-        for i in range(6):
-            a0 = dN[0, i]
-            a1 = dN[1, i]
-            for c in range(3):
-                Y[r, 6 * i + c] = a0 * core[r, c] + a1 * core[r, 3 + c]
-        for c in range(3):
-            Y[r, 3 + c] = core[r, 6 + c]
-        if ns == 6:
-            for i in range(1, 6):
-                n = N[i]
-                a0 = dN[0, i]
-                a1 = dN[1, i]
-                for c in range(3):
-                    Y[r, 6 * i + 3 + c] = n * core[r, 9 + c] + a0 * core[r, 12 + c] + a1 * core[r, 15 + c]
-        else:
-            for i in range(1, 6):
-                n = N[i]
-                for c in range(3):
-                    Y[r, 6 * i + 3 + c] = n * core[r, 9 + c]
-    # stage 2: Kz += Pi^T Y
+def _force_points(used, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz):
+    """fz (z, row 0) = sum_p Pi_p^T G_xi^T D^T s_p."""
+    for r in range(NZ):
+        fz[0, r] = 0.0
+    for k in range(used.shape[0]):
+        p = used[k]
+        _load_point(p, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s)
+        _strain_gradient_T(F, s, g)
+        for c in range(12):
+            G2[0, c] = g[c]
+        _GT_times(G2, 0, F, Q, T, R, X0, X1, phi, 0)
+        _expand_vec(phi, 0, p, fz, 0)
+
+
+@jit
+def _force_to_local(e, fz, fr, Ti, f):
+    """f[e] = P^T fz: f_u,I = R_I^T fz[x_I], f_th,I = T_I^T fz[d_I], f_th,0 = fz[th_0] - sum_I T_I fz[d_I]."""
     for i in range(6):
-        a0 = dN[0, i]
-        a1 = dN[1, i]
         for c in range(3):
-            row = 6 * i + c
-            for k in range(NDOF):
-                Kz[row, k] += a0 * Y[c, k] + a1 * Y[3 + c, k]
+            f[e, 6 * i + c] = fr[i, 0, c] * fz[0, i] + fr[i, 1, c] * fz[0, 8 + i] + fr[i, 2, c] * fz[0, 16 + i]
     for c in range(3):
-        for k in range(NDOF):
-            Kz[3 + c, k] += Y[6 + c, k]
+        f[e, 3 + c] = fz[0, _ZR + 8 * c]
     for i in range(1, 6):
-        n = N[i]
-        a0 = dN[0, i]
-        a1 = dN[1, i]
+        e0 = fz[0, _ZR + i]
+        e1 = fz[0, _ZR + 8 + i]
+        e2 = fz[0, _ZR + 16 + i]
         for c in range(3):
-            row = 6 * i + 3 + c
-            if ns == 6:
-                for k in range(NDOF):
-                    Kz[row, k] += n * Y[9 + c, k] + a0 * Y[12 + c, k] + a1 * Y[15 + c, k]
-            else:
-                for k in range(NDOF):
-                    Kz[row, k] += n * Y[9 + c, k]
+            f[e, 6 * i + 3 + c] = Ti[i, 0, c] * e0 + Ti[i, 1, c] * e1 + Ti[i, 2, c] * e2
+            f[e, 3 + c] -= Ti[i, c, 0] * e0 + Ti[i, c, 1] * e1 + Ti[i, c, 2] * e2
 
 
-@jit
-def _force_to_local(fz, fr, Ti, f):
-    """f = P^T fz: f_u,I = R_I^T fz[x_I], f_theta,I = T_I^T fz[d_I], f_theta,0 = fz[theta_0] - sum T_I fz[d_I]."""
-    for i in range(6):
-        R = fr[i]
-        for c in range(3):
-            f[6 * i + c] = R[0, c] * fz[6 * i] + R[1, c] * fz[6 * i + 1] + R[2, c] * fz[6 * i + 2]
-    for c in range(3):
-        f[3 + c] = fz[3 + c]
-    for i in range(1, 6):
-        Tm = Ti[i]
-        e0 = fz[6 * i + 3]
-        e1 = fz[6 * i + 4]
-        e2 = fz[6 * i + 5]
-        for c in range(3):
-            f[6 * i + 3 + c] = Tm[0, c] * e0 + Tm[1, c] * e1 + Tm[2, c] * e2
-            f[3 + c] -= Tm[c, 0] * e0 + Tm[c, 1] * e1 + Tm[c, 2] * e2
-
-
-@jit
-def _tangent_to_local(Kz, fr, Ti, K1, K):
-    """K = P^T Kz P."""
-    # K1 = Kz P
-    for r in range(NDOF):
-        for i in range(6):
-            R = fr[i]
-            k0 = Kz[r, 6 * i]
-            k1 = Kz[r, 6 * i + 1]
-            k2 = Kz[r, 6 * i + 2]
-            for c in range(3):
-                K1[r, 6 * i + c] = k0 * R[0, c] + k1 * R[1, c] + k2 * R[2, c]
-        t0 = Kz[r, 3]
-        t1 = Kz[r, 4]
-        t2 = Kz[r, 5]
-        for i in range(1, 6):
-            Tm = Ti[i]
-            k0 = Kz[r, 6 * i + 3]
-            k1 = Kz[r, 6 * i + 4]
-            k2 = Kz[r, 6 * i + 5]
-            for c in range(3):
-                K1[r, 6 * i + 3 + c] = k0 * Tm[0, c] + k1 * Tm[1, c] + k2 * Tm[2, c]
-            # - Kz[r, d_i] T_i^T
-            t0 -= k0 * Tm[0, 0] + k1 * Tm[0, 1] + k2 * Tm[0, 2]
-            t1 -= k0 * Tm[1, 0] + k1 * Tm[1, 1] + k2 * Tm[1, 2]
-            t2 -= k0 * Tm[2, 0] + k1 * Tm[2, 1] + k2 * Tm[2, 2]
-        K1[r, 3] = t0
-        K1[r, 4] = t1
-        K1[r, 5] = t2
-    # K = P^T K1
-    for i in range(6):
-        R = fr[i]
-        for c in range(3):
-            w0 = R[0, c]
-            w1 = R[1, c]
-            w2 = R[2, c]
-            for k in range(NDOF):
-                K[6 * i + c, k] = w0 * K1[6 * i, k] + w1 * K1[6 * i + 1, k] + w2 * K1[6 * i + 2, k]
-    for c in range(3):
-        for k in range(NDOF):
-            K[3 + c, k] = K1[3 + c, k]
-    for i in range(1, 6):
-        Tm = Ti[i]
-        for c in range(3):
-            w0 = Tm[0, c]
-            w1 = Tm[1, c]
-            w2 = Tm[2, c]
-            v0 = Tm[c, 0]
-            v1 = Tm[c, 1]
-            v2 = Tm[c, 2]
-            for k in range(NDOF):
-                a = K1[6 * i + 3, k]
-                b = K1[6 * i + 4, k]
-                e = K1[6 * i + 5, k]
-                K[6 * i + 3 + c, k] = w0 * a + w1 * b + w2 * e
-                K[3 + c, k] -= v0 * a + v1 * b + v2 * e
-
-
-@jit
-def _node_terms(f, fz, dn, Ti, nco, K, tm):
-    """K += (D P^T[.]) fz: hat(f_u,I) in (u_I, theta_I) and the D T^-1 terms of Delta(delta d_I)."""
-    for i in range(6):
-        u0 = f[6 * i]
-        u1 = f[6 * i + 1]
-        u2 = f[6 * i + 2]
-        r = 6 * i
-        c = 6 * i + 3
-        K[r, c + 1] -= u2
-        K[r, c + 2] += u1
-        K[r + 1, c] += u2
-        K[r + 1, c + 2] -= u0
-        K[r + 2, c] -= u1
-        K[r + 2, c + 1] += u0
-    Dp = tm[0]
-    Dm = tm[1]
-    M = tm[2]
-    for i in range(1, 6):
-        e0 = fz[6 * i + 3]
-        e1 = fz[6 * i + 4]
-        e2 = fz[6 * i + 5]
-        a4 = nco[i, 3]
-        c4 = nco[i, 6]
-        _dtan_inv_into(dn[i, 0], dn[i, 1], dn[i, 2], e0, e1, e2, a4, c4, Dp)
-        # D T^-1(-d)[.] e = -hat(e) - D T^-1(d)[.] e
-        _hat(-e0, -e1, -e2, Dm)
-        for r in range(3):
-            for c in range(3):
-                Dm[r, c] -= Dp[r, c]
-        Tm = Ti[i]
-        t = 6 * i + 3
-        _mm(Dm, Tm, M)       # theta_i, theta_i: -Dm T_i
-        for r in range(3):
-            for c in range(3):
-                K[t + r, t + c] -= M[r, c]
-        _mmT(Dm, Tm, M)      # theta_i, theta_0: +Dm T_i^T
-        for r in range(3):
-            for c in range(3):
-                K[t + r, 3 + c] += M[r, c]
-        _mm(Dp, Tm, M)       # theta_0, theta_i: -Dp T_i
-        for r in range(3):
-            for c in range(3):
-                K[3 + r, t + c] -= M[r, c]
-        _mmT(Dp, Tm, M)      # theta_0, theta_0: +Dp T_i^T
-        for r in range(3):
-            for c in range(3):
-                K[3 + r, 3 + c] += M[r, c]
-
-
-# ----------------------------------------------------------------------------------------------------------
-# The contracted second variation and G^T Hf G at a point, in slots
-# ----------------------------------------------------------------------------------------------------------
-
-
-@jit
-def _geometric_core(s, g, F, Q, T, R, X, d, da, co, core, ns, tm):
-    """core (slots) = G_xi^T Hf(s) G_xi + second variation contracted with g = D^T s (minus node terms).
+@inl
+def _geometric_core(s, g, F, Q, T, R, X0, X1, d, da, co, core, ns, with_uu, t0, t1, t2, t3, t4, t5):
+    """core (slots) = G_xi^T Hf(s) G_xi + second variation contracted with g = D^T s (less the node terms).
 
     Closed forms of kinematics.strain_hessian / second_variation in the slots, with
     m_a = sum_b A_ab f_bu (A = [[s0, s2/2], [s2/2, s1]]), n_a = m_a - a_a, c = sum_a a_a x f_au and
-    Omega = sum_a (f_au a_a^T - m_a f_au^T + (f_au . n_a) I).
+    Omega = sum_a (f_au a_a^T - m_a f_au^T + (f_au . n_a) I):
+      [U_a, U_b] = A_ab I, [U_a, V0] = R hat(n_a) Q^T, [U_a, V] = R hat(n_a) T (and transposes),
+      [V0, V0] = Q Omega Q^T, [V, V0] = T^T Omega Q^T, [V0, V] = Q (Omega - hat c) T,
+      [V, V] = T^T Omega T - DT(-d)[.] c, plus the bending-weight terms (ns = 6).
     """
     nr = 3 * ns
     for i in range(nr):
         for j in range(nr):
             core[i, j] = 0.0
-    f0 = F[0]
-    f1 = F[1]
     A01 = 0.5 * s[2]
-    Om = tm[0]
-    nvec = tm[7]  # rows 0, 1: n_a ; row 2: c
+    # t5 rows: m_0, m_1 ; n_a into t4 rows 0, 1
     dot = 0.0
     for c in range(3):
-        m0 = s[0] * f0[c] + A01 * f1[c]
-        m1 = A01 * f0[c] + s[1] * f1[c]
-        nvec[0, c] = m0 - g[c]
-        nvec[1, c] = m1 - g[3 + c]
-        dot += f0[c] * nvec[0, c] + f1[c] * nvec[1, c]
+        m0 = s[0] * F[0, c] + A01 * F[1, c]
+        m1 = A01 * F[0, c] + s[1] * F[1, c]
+        t5[0, c] = m0
+        t5[1, c] = m1
+        t4[0, c] = m0 - g[c]
+        t4[1, c] = m1 - g[3 + c]
+        dot += F[0, c] * t4[0, c] + F[1, c] * t4[1, c]
+    Om = t0
     for i in range(3):
-        m0i = s[0] * f0[i] + A01 * f1[i]
-        m1i = A01 * f0[i] + s[1] * f1[i]
         for j in range(3):
-            Om[i, j] = f0[i] * g[j] + f1[i] * g[3 + j] - m0i * f0[j] - m1i * f1[j]
+            Om[i, j] = F[0, i] * g[j] + F[1, i] * g[3 + j] - t5[0, i] * F[0, j] - t5[1, i] * F[1, j]
         Om[i, i] += dot
-    cc0 = (g[1] * f0[2] - g[2] * f0[1]) + (g[4] * f1[2] - g[5] * f1[1])
-    cc1 = (g[2] * f0[0] - g[0] * f0[2]) + (g[5] * f1[0] - g[3] * f1[2])
-    cc2 = (g[0] * f0[1] - g[1] * f0[0]) + (g[3] * f1[1] - g[4] * f1[0])
-    # U-U: A_ab I
-    for c in range(3):
-        core[c, c] += s[0]
-        core[3 + c, 3 + c] += s[1]
-        core[c, 3 + c] += A01
-        core[3 + c, c] += A01
+    cc0 = (g[1] * F[0, 2] - g[2] * F[0, 1]) + (g[4] * F[1, 2] - g[5] * F[1, 1])
+    cc1 = (g[2] * F[0, 0] - g[0] * F[0, 2]) + (g[5] * F[1, 0] - g[3] * F[1, 2])
+    cc2 = (g[0] * F[0, 1] - g[1] * F[0, 0]) + (g[3] * F[1, 1] - g[4] * F[1, 0])
+    # U-U: A_ab I (left out with with_uu False: then accumulated as scalars, see _points_tangent)
+    if with_uu:
+        for c in range(3):
+            core[c, c] += s[0]
+            core[3 + c, 3 + c] += s[1]
+            core[c, 3 + c] += A01
+            core[3 + c, c] += A01
     # U_a - V0 / V: R hat(n_a) Q^T, R hat(n_a) T and their transposes
-    H = tm[1]
-    RH = tm[2]
-    M = tm[3]
     for a in range(2):
-        _hat(nvec[a, 0], nvec[a, 1], nvec[a, 2], H)
-        _mm(R, H, RH)
-        _mmT(RH, Q, M)
-        _add_blk(core, a, _V0, M, 1.0)
-        _add_blkT(core, _V0, a, M, 1.0)
-        _mm(RH, T, M)
-        _add_blk(core, a, _V, M, 1.0)
-        _add_blkT(core, _V, a, M, 1.0)
+        _Rhat(R, t4[a, 0], t4[a, 1], t4[a, 2], t1)
+        _mmT(t1, Q, t2)
+        _add_blk_both(core, a, _V0, t2, 1.0)
+        _mm(t1, T, t2)
+        _add_blk_both(core, a, _V, t2, 1.0)
     # V0 / V blocks
-    OQ = tm[1]
-    _mmT(Om, Q, OQ)                 # Omega Q^T
-    _mm(Q, OQ, M)
-    _add_blk(core, _V0, _V0, M, 1.0)
-    _mTm(T, OQ, M)
-    _add_blk(core, _V, _V0, M, 1.0)
-    TO = tm[2]
-    _mTm(T, Om, TO)
-    _mm(TO, T, M)
-    _add_blk(core, _V, _V, M, 1.0)
+    _mmT(Om, Q, t1)                 # Omega Q^T
+    _mm(Q, t1, t2)
+    _add_blk(core, _V0, _V0, t2, 1.0)
+    _mTm(T, t1, t2)
+    _add_blk(core, _V, _V0, t2, 1.0)
+    _mTm(T, Om, t1)
+    _mm(t1, T, t2)
+    _add_blk(core, _V, _V, t2, 1.0)
     # [V0, V] = Q (Omega - hat(c)) T
     Om[0, 1] += cc2
     Om[0, 2] -= cc1
@@ -704,358 +765,751 @@ def _geometric_core(s, g, F, Q, T, R, X, d, da, co, core, ns, tm):
     Om[1, 2] += cc0
     Om[2, 0] += cc1
     Om[2, 1] -= cc0
-    _mm(Q, Om, TO)
-    _mm(TO, T, M)
-    _add_blk(core, _V0, _V, M, 1.0)
+    _mm(Q, Om, t1)
+    _mm(t1, T, t2)
+    _add_blk(core, _V0, _V, t2, 1.0)
     # [V, V] -= D T(-d)[.] c
-    nvec[2, 0] = cc0
-    nvec[2, 1] = cc1
-    nvec[2, 2] = cc2
-    _dtan_into(-d[0], -d[1], -d[2], nvec[2], co, M)
-    _add_blk(core, _V, _V, M, -1.0)
+    _dtan_to(-d[0], -d[1], -d[2], cc0, cc1, cc2, co, t2)
+    _add_blk(core, _V, _V, t2, -1.0)
     if ns < 6:
         return
     # ---- terms of the bending weights: Hf couplings f_u - f_w and the b-terms of the second variation
     b3 = s[3]
     b4 = s[4]
     b5 = 0.5 * s[5]
-    # beta_ab couples f_au with f_bw: [[s3, s5/2], [s5/2, s4]]; h_b = sum_a beta_ab f_au
-    hv = tm[6]
+    # beta_ab couples f_au with f_bw: [[s3, s5/2], [s5/2, s4]];  h_b = sum_a beta_ab f_au  (rows of t5)
     for c in range(3):
-        hv[0, c] = b3 * f0[c] + b5 * f1[c]
-        hv[1, c] = b5 * f0[c] + b4 * f1[c]
-    # RE = R hat(e3): columns (R[:,1], -R[:,0], 0)
-    RE = tm[1]
+        t5[0, c] = b3 * F[0, c] + b5 * F[1, c]
+        t5[1, c] = b5 * F[0, c] + b4 * F[1, c]
+    # RE = R hat(e3): columns (R[:,1], -R[:,0], 0);  RET = R E T
     for r in range(3):
-        RE[r, 0] = R[r, 1]
-        RE[r, 1] = -R[r, 0]
-        RE[r, 2] = 0.0
-    RET = tm[2]
-    _mm(RE, T, RET)
-    S = tm[4]
+        for c in range(3):
+            t1[r, c] = R[r, 1] * T[0, c] - R[r, 0] * T[1, c]
     for a in range(2):
         ba0 = b3 if a == 0 else b5
         ba1 = b5 if a == 0 else b4
         # Z[U_a, V] = -R E (sum_b beta_ab X_b)
         for r in range(3):
             for c in range(3):
-                S[r, c] = ba0 * X[0, r, c] + ba1 * X[1, r, c]
-        _mm(RE, S, M)
-        _add_blk(core, a, _V, M, -1.0)
-        _add_blkT(core, _V, a, M, -1.0)
+                t3[r, c] = ba0 * X0[r, c] + ba1 * X1[r, c]
+        for r in range(3):
+            for c in range(3):
+                t2[r, c] = R[r, 1] * t3[0, c] - R[r, 0] * t3[1, c]
+        _add_blk_both(core, a, _V, t2, -1.0)
         # Z[U_a, W_b] = -beta_ab R E T
-        _add_blk(core, a, _W0, RET, -ba0)
-        _add_blkT(core, _W0, a, RET, -ba0)
-        _add_blk(core, a, _W1, RET, -ba1)
-        _add_blkT(core, _W1, a, RET, -ba1)
-    # HX = sum_b hat(h_b) E X_b,  hat(h) E = e3 h^T - h_2 I
-    HX = tm[4]
+        _add_blk_both(core, a, _W0, t1, -ba0)
+        _add_blk_both(core, a, _W1, t1, -ba1)
+    # HX = sum_b hat(h_b) E X_b, with hat(h) E = e3 h^T - h_2 I
     for r in range(3):
         for c in range(3):
-            HX[r, c] = -(hv[0, 2] * X[0, r, c] + hv[1, 2] * X[1, r, c])
+            t3[r, c] = -(t5[0, 2] * X0[r, c] + t5[1, 2] * X1[r, c])
     for c in range(3):
-        HX[2, c] += (hv[0, 0] * X[0, 0, c] + hv[0, 1] * X[0, 1, c] + hv[0, 2] * X[0, 2, c]
-                     + hv[1, 0] * X[1, 0, c] + hv[1, 1] * X[1, 1, c] + hv[1, 2] * X[1, 2, c])
-    _mm(Q, HX, M)
-    _add_blk(core, _V0, _V, M, 1.0)
-    _add_blkT(core, _V, _V0, M, 1.0)
-    _mTm(T, HX, M)
-    _add_blk(core, _V, _V, M, 1.0)
-    _add_blkT(core, _V, _V, M, 1.0)
+        t3[2, c] += (t5[0, 0] * X0[0, c] + t5[0, 1] * X0[1, c] + t5[0, 2] * X0[2, c]
+                     + t5[1, 0] * X1[0, c] + t5[1, 1] * X1[1, c] + t5[1, 2] * X1[2, c])
+    _mm(Q, t3, t2)
+    _add_blk_both(core, _V0, _V, t2, 1.0)
+    _mTm(T, t3, t2)
+    _add_blk_both(core, _V, _V, t2, 1.0)
     # Z[V0, W_b] = Q hat(h_b) E T, Z[V, W_b] = T^T hat(h_b) E T
-    HT = tm[5]
     for b in range(2):
         for r in range(3):
             for c in range(3):
-                HT[r, c] = -hv[b, 2] * T[r, c]
+                t3[r, c] = -t5[b, 2] * T[r, c]
         for c in range(3):
-            HT[2, c] += hv[b, 0] * T[0, c] + hv[b, 1] * T[1, c] + hv[b, 2] * T[2, c]
-        _mm(Q, HT, M)
-        _add_blk(core, _V0, _W0 + b, M, 1.0)
-        _add_blkT(core, _W0 + b, _V0, M, 1.0)
-        _mTm(T, HT, M)
-        _add_blk(core, _V, _W0 + b, M, 1.0)
-        _add_blkT(core, _W0 + b, _V, M, 1.0)
-    # second variation: D^2 T(d)[., .] contracted with b_a, d_,a ; Z_a = -D T(-d)[.] b_a
+            t3[2, c] += t5[b, 0] * T[0, c] + t5[b, 1] * T[1, c] + t5[b, 2] * T[2, c]
+        _mm(Q, t3, t2)
+        _add_blk_both(core, _V0, _W0 + b, t2, 1.0)
+        _mTm(T, t3, t2)
+        _add_blk_both(core, _V, _W0 + b, t2, 1.0)
+    # second variation: D^2 T(d)[., .] contracted with b_a, d_,a ; Z_a = -D T(-d)[.] b_a at (V, W_a)
     for a in range(2):
-        ba = g[6 + 3 * a:9 + 3 * a]
-        _d2tan_add(d, ba, da[a], co, core, _V, _V)
-        _dtan_into(-d[0], -d[1], -d[2], ba, co, M)
-        _add_blkT(core, _V, _W0 + a, M, -1.0)
-        _add_blk(core, _W0 + a, _V, M, -1.0)
+        o = 6 + 3 * a
+        _d2tan_to(d[0], d[1], d[2], g[o], g[o + 1], g[o + 2], da[a, 0], da[a, 1], da[a, 2], co, t2)
+        _add_blk(core, _V, _V, t2, 1.0)
+        _dtan_to(-d[0], -d[1], -d[2], g[o], g[o + 1], g[o + 2], co, t2)
+        _add_blk_both(core, _W0 + a, _V, t2, -1.0)
 
 
 # ----------------------------------------------------------------------------------------------------------
-# One element
+# Tangent: points, nonlocal material rows, change of variables
 # ----------------------------------------------------------------------------------------------------------
 
 
 @jit
-def _element(x, fr, e_ref, to_cart, wts, C, used, nz_g, nz_i, nz_p, nz_j, nz_v,
-             need_b, pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
-             nl_rows, n_nl, nl_ptr, nl_i, nl_k, nl_v, smp_p, smp_j,
-             want_tangent, f_out, K_out,
-             dn, Ti, nco, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps, Pg, PB,
-             cov, st, Ch, phi, fz, g12, core, Y, Kz, K1, S, Bl, CBl, Bn, CBn, tm):
-    """Internal force (and tangent) of one element into f_out (36,) and K_out (36, 36)."""
-    n_used = used.shape[0]
-    _node_setup(fr, dn, Ti, nco)
-    for k in range(n_used):
-        p = used[k]
-        _point_kinematics(x, fr, dn, _EVAL_N[p], _EVAL_DN[p], Pd[p], Pda[p], Pco[p], PQ[p], PT[p], PR[p],
-                          PF[p], PX[p], True)
-        _covariant_strains(PF[p], e_ref[p], Pe[p])
-    # assumed covariant strains -> Cartesian strains -> stress resultants -> covariant stress weights s_p
+def _section_cov(e, to_cart, weights, C, CT, Ch):
+    """Covariant section per Gauss point: Ch_g = w_g T_g^T C T_g (zero entries of C and T_g skipped)."""
+    n8 = _u(CT.shape[1])
     for gg in range(N_GAUSS):
-        for i in range(8):
-            cov[gg, i] = 0.0
-    for q in range(nz_g.shape[0]):
-        cov[nz_g[q], nz_i[q]] += nz_v[q] * Pe[nz_p[q], nz_j[q]]
-    for gg in range(N_GAUSS):
-        Tg = to_cart[gg]
-        w = wts[gg]
-        for r in range(8):  # eps in g12[0:8], sigma in g12[8:12] + phi[0:4] (scratch)
-            acc = 0.0
-            for c in range(8):
-                acc += Tg[r, c] * cov[gg, c]
-            phi[r] = acc
+        w = weights[e, gg]
         for r in range(8):
-            acc = 0.0
-            for c in range(8):
-                acc += C[r, c] * phi[c]
-            phi[8 + r] = w * acc
-        for c in range(8):
-            acc = 0.0
-            for r in range(8):
-                acc += Tg[r, c] * phi[8 + r]
-            st[gg, c] = acc
-    for k in range(n_used):
-        p = used[k]
-        for j in range(8):
-            Ps[p, j] = 0.0
-    for q in range(nz_g.shape[0]):
-        Ps[nz_p[q], nz_j[q]] += nz_v[q] * st[nz_g[q], nz_i[q]]
-    # force: fz = sum_p Pi_p^T G_xi^T D^T s_p
-    for r in range(NDOF):
-        fz[r] = 0.0
-    for k in range(n_used):
-        p = used[k]
-        _strain_gradient_T(PF[p], Ps[p], Pg[p])
-        _GT_times(Pg[p], PF[p], PQ[p], PT[p], PR[p], PX[p], phi)
-        _expand_vec(phi, _EVAL_N[p], _EVAL_DN[p], fz)
-    _force_to_local(fz, fr, Ti, f_out)
-    if not want_tangent:
-        return
-    # ---- tangent, in z
-    # covariant section per Gauss point: Ch_g = w_g T_g^T C T_g
-    for gg in range(N_GAUSS):
-        Tg = to_cart[gg]
-        w = wts[gg]
-        Cg = Ch[gg]
+            for c in range(_u(0), n8):
+                CT[r, c] = 0.0
+            for k in range(8):
+                ck = C[r, k]
+                if ck != 0.0:
+                    for c in range(_u(0), n8):
+                        CT[r, c] += ck * to_cart[e, gg, k, c]
         for r in range(8):
-            for c in range(8):
-                acc = 0.0
-                for k2 in range(8):
-                    t = Tg[k2, c]
-                    if t != 0.0:
-                        acc += C[r, k2] * t
-                K1[r, c] = acc  # C T_g (scratch)
-        for r in range(8):
-            for c in range(8):
-                acc = 0.0
-                for k2 in range(8):
-                    t = Tg[k2, r]
-                    if t != 0.0:
-                        acc += t * K1[k2, c]
-                Cg[r, c] = w * acc
-    # B rows in slots where needed
-    for k in range(n_used):
-        p = used[k]
-        for j in range(8):
-            if need_b[p, j]:
-                _strain_gradient_row(PF[p], j, g12)
-                _GT_times(g12, PF[p], PQ[p], PT[p], PR[p], PX[p], PB[p, j])
-    for r in range(NDOF):
-        for c in range(NDOF):
+            for c in range(_u(0), n8):
+                Ch[gg, r, c] = 0.0
+            for k in range(8):
+                tk = to_cart[e, gg, k, r]
+                if tk != 0.0:
+                    tk *= w
+                    for c in range(_u(0), n8):
+                        Ch[gg, r, c] += tk * CT[k, c]
+
+
+@inl
+def _expand_core(core, ns, p, Y, Kz):
+    """Kz += Pi^T core Pi (z padded, NZ) on the accumulation pattern (see _KR).
+
+    Loops are blocked (one loop per core row in stage 1, one per component block of six rows in stage 2) so
+    that few, long loops vectorize.
+    """
+    nr = 3 * ns
+    nz = _u(Kz.shape[1])     # run-time trip counts (48, 8): see _u
+    n8 = nz // _u(6)
+    # stage 1: Y = core Pi (nr x NZ)
+    for r in range(nr):
+        a0 = core[r, 0]
+        a1 = core[r, 1]
+        a2 = core[r, 2]
+        b0 = core[r, 3]
+        b1 = core[r, 4]
+        b2 = core[r, 5]
+        c0 = core[r, 6]
+        c1 = core[r, 7]
+        c2 = core[r, 8]
+        d0 = core[r, 9]
+        d1 = core[r, 10]
+        d2 = core[r, 11]
+        if ns == 6:
+            e0 = core[r, 12]
+            e1 = core[r, 13]
+            e2 = core[r, 14]
+            f0 = core[r, 15]
+            f1 = core[r, 16]
+            f2 = core[r, 17]
+        else:
+            e0 = e1 = e2 = f0 = f1 = f2 = 0.0
+        for i in range(_u(0), n8):
+            p0 = _PI8[p, 0, i]
+            p1 = _PI8[p, 1, i]
+            p2 = _PI8[p, 2, i]
+            p3 = _PI8[p, 3, i]
+            p4 = _PI8[p, 4, i]
+            p5 = _PI8[p, 5, i]
+            Y[r, i] = p0 * a0 + p1 * b0
+            Y[r, 8 + i] = p0 * a1 + p1 * b1
+            Y[r, 16 + i] = p0 * a2 + p1 * b2
+            Y[r, 24 + i] = p2 * c0 + p3 * d0 + p4 * e0 + p5 * f0
+            Y[r, 32 + i] = p2 * c1 + p3 * d1 + p4 * e1 + p5 * f1
+            Y[r, 40 + i] = p2 * c2 + p3 * d2 + p4 * e2 + p5 * f2
+    # stage 2, translation rows of component c (sources U0, U1)
+    a00 = _PI8[p, 0, 0]
+    a01 = _PI8[p, 0, 1]
+    a02 = _PI8[p, 0, 2]
+    a03 = _PI8[p, 0, 3]
+    a04 = _PI8[p, 0, 4]
+    a05 = _PI8[p, 0, 5]
+    a10 = _PI8[p, 1, 0]
+    a11 = _PI8[p, 1, 1]
+    a12 = _PI8[p, 1, 2]
+    a13 = _PI8[p, 1, 3]
+    a14 = _PI8[p, 1, 4]
+    a15 = _PI8[p, 1, 5]
+    for c in range(3):
+        b = 8 * c
+        for k in range(_u(0), nz):
+            y0 = Y[c, k]
+            y1 = Y[3 + c, k]
+            Kz[b, k] += a00 * y0 + a10 * y1
+            Kz[b + 1, k] += a01 * y0 + a11 * y1
+            Kz[b + 2, k] += a02 * y0 + a12 * y1
+            Kz[b + 3, k] += a03 * y0 + a13 * y1
+            Kz[b + 4, k] += a04 * y0 + a14 * y1
+            Kz[b + 5, k] += a05 * y0 + a15 * y1
+    # stage 2, rotation rows of component c (sources V0, V, W0, W1), rotation columns
+    n1 = _PI8[p, 3, 1]
+    n2 = _PI8[p, 3, 2]
+    n3 = _PI8[p, 3, 3]
+    n4 = _PI8[p, 3, 4]
+    n5 = _PI8[p, 3, 5]
+    p1 = _PI8[p, 4, 1]
+    p2 = _PI8[p, 4, 2]
+    p3 = _PI8[p, 4, 3]
+    p4 = _PI8[p, 4, 4]
+    p5 = _PI8[p, 4, 5]
+    q1 = _PI8[p, 5, 1]
+    q2 = _PI8[p, 5, 2]
+    q3 = _PI8[p, 5, 3]
+    q4 = _PI8[p, 5, 4]
+    q5 = _PI8[p, 5, 5]
+    for c in range(3):
+        b = _ZR + 8 * c
+        if ns == 6:
+            for k in range(_u(_KR), nz):
+                v0 = Y[6 + c, k]
+                v = Y[9 + c, k]
+                w0 = Y[12 + c, k]
+                w1 = Y[15 + c, k]
+                Kz[b, k] += v0
+                Kz[b + 1, k] += n1 * v + p1 * w0 + q1 * w1
+                Kz[b + 2, k] += n2 * v + p2 * w0 + q2 * w1
+                Kz[b + 3, k] += n3 * v + p3 * w0 + q3 * w1
+                Kz[b + 4, k] += n4 * v + p4 * w0 + q4 * w1
+                Kz[b + 5, k] += n5 * v + p5 * w0 + q5 * w1
+        else:
+            for k in range(_u(_KR), nz):
+                v0 = Y[6 + c, k]
+                v = Y[9 + c, k]
+                Kz[b, k] += v0
+                Kz[b + 1, k] += n1 * v
+                Kz[b + 2, k] += n2 * v
+                Kz[b + 3, k] += n3 * v
+                Kz[b + 4, k] += n4 * v
+                Kz[b + 5, k] += n5 * v
+
+
+@inl
+def _expand_core_rot(core, ns, p, Y, Kz):
+    """Kz += Pi^T core Pi restricted to the rotation columns (core without its translation-translation block)."""
+    nr = 3 * ns
+    nz = _u(Kz.shape[1])
+    n8 = nz // _u(6)
+    for r in range(nr):
+        c0 = core[r, 6]
+        c1 = core[r, 7]
+        c2 = core[r, 8]
+        d0 = core[r, 9]
+        d1 = core[r, 10]
+        d2 = core[r, 11]
+        if ns == 6:
+            e0 = core[r, 12]
+            e1 = core[r, 13]
+            e2 = core[r, 14]
+            f0 = core[r, 15]
+            f1 = core[r, 16]
+            f2 = core[r, 17]
+        else:
+            e0 = e1 = e2 = f0 = f1 = f2 = 0.0
+        for i in range(_u(0), n8):
+            p2 = _PI8[p, 2, i]
+            p3 = _PI8[p, 3, i]
+            p4 = _PI8[p, 4, i]
+            p5 = _PI8[p, 5, i]
+            Y[r, 24 + i] = p2 * c0 + p3 * d0 + p4 * e0 + p5 * f0
+            Y[r, 32 + i] = p2 * c1 + p3 * d1 + p4 * e1 + p5 * f1
+            Y[r, 40 + i] = p2 * c2 + p3 * d2 + p4 * e2 + p5 * f2
+    a00 = _PI8[p, 0, 0]
+    a01 = _PI8[p, 0, 1]
+    a02 = _PI8[p, 0, 2]
+    a03 = _PI8[p, 0, 3]
+    a04 = _PI8[p, 0, 4]
+    a05 = _PI8[p, 0, 5]
+    a10 = _PI8[p, 1, 0]
+    a11 = _PI8[p, 1, 1]
+    a12 = _PI8[p, 1, 2]
+    a13 = _PI8[p, 1, 3]
+    a14 = _PI8[p, 1, 4]
+    a15 = _PI8[p, 1, 5]
+    for c in range(3):
+        b = 8 * c
+        for k in range(_u(_ZR), nz):
+            y0 = Y[c, k]
+            y1 = Y[3 + c, k]
+            Kz[b, k] += a00 * y0 + a10 * y1
+            Kz[b + 1, k] += a01 * y0 + a11 * y1
+            Kz[b + 2, k] += a02 * y0 + a12 * y1
+            Kz[b + 3, k] += a03 * y0 + a13 * y1
+            Kz[b + 4, k] += a04 * y0 + a14 * y1
+            Kz[b + 5, k] += a05 * y0 + a15 * y1
+    n1 = _PI8[p, 3, 1]
+    n2 = _PI8[p, 3, 2]
+    n3 = _PI8[p, 3, 3]
+    n4 = _PI8[p, 3, 4]
+    n5 = _PI8[p, 3, 5]
+    p1 = _PI8[p, 4, 1]
+    p2 = _PI8[p, 4, 2]
+    p3 = _PI8[p, 4, 3]
+    p4 = _PI8[p, 4, 4]
+    p5 = _PI8[p, 4, 5]
+    q1 = _PI8[p, 5, 1]
+    q2 = _PI8[p, 5, 2]
+    q3 = _PI8[p, 5, 3]
+    q4 = _PI8[p, 5, 4]
+    q5 = _PI8[p, 5, 5]
+    for c in range(3):
+        b = _ZR + 8 * c
+        for k in range(_u(_ZR), nz):
+            v0 = Y[6 + c, k]
+            v = Y[9 + c, k]
+            if ns == 6:
+                w0 = Y[12 + c, k]
+                w1 = Y[15 + c, k]
+            else:
+                w0 = 0.0
+                w1 = 0.0
+            Kz[b, k] += v0
+            Kz[b + 1, k] += n1 * v + p1 * w0 + q1 * w1
+            Kz[b + 2, k] += n2 * v + p2 * w0 + q2 * w1
+            Kz[b + 3, k] += n3 * v + p3 * w0 + q3 * w1
+            Kz[b + 4, k] += n4 * v + p4 * w0 + q4 * w1
+            Kz[b + 5, k] += n5 * v + p5 * w0 + q5 * w1
+
+
+@inl
+def _rank_update_block(Kz, b, k0, S, W, a):
+    """Kz[b:b+6, k0:] += S[a:a+4, b:b+6]^T W[a:a+4, k0:] (six rows, four sources per loop)."""
+    s00 = S[a, b]
+    s01 = S[a, b + 1]
+    s02 = S[a, b + 2]
+    s03 = S[a, b + 3]
+    s04 = S[a, b + 4]
+    s05 = S[a, b + 5]
+    s10 = S[a + 1, b]
+    s11 = S[a + 1, b + 1]
+    s12 = S[a + 1, b + 2]
+    s13 = S[a + 1, b + 3]
+    s14 = S[a + 1, b + 4]
+    s15 = S[a + 1, b + 5]
+    s20 = S[a + 2, b]
+    s21 = S[a + 2, b + 1]
+    s22 = S[a + 2, b + 2]
+    s23 = S[a + 2, b + 3]
+    s24 = S[a + 2, b + 4]
+    s25 = S[a + 2, b + 5]
+    s30 = S[a + 3, b]
+    s31 = S[a + 3, b + 1]
+    s32 = S[a + 3, b + 2]
+    s33 = S[a + 3, b + 3]
+    s34 = S[a + 3, b + 4]
+    s35 = S[a + 3, b + 5]
+    for k in range(k0, _u(Kz.shape[1])):
+        w0 = W[a, k]
+        w1 = W[a + 1, k]
+        w2 = W[a + 2, k]
+        w3 = W[a + 3, k]
+        Kz[b, k] += s00 * w0 + s10 * w1 + s20 * w2 + s30 * w3
+        Kz[b + 1, k] += s01 * w0 + s11 * w1 + s21 * w2 + s31 * w3
+        Kz[b + 2, k] += s02 * w0 + s12 * w1 + s22 * w2 + s32 * w3
+        Kz[b + 3, k] += s03 * w0 + s13 * w1 + s23 * w2 + s33 * w3
+        Kz[b + 4, k] += s04 * w0 + s14 * w1 + s24 * w2 + s34 * w3
+        Kz[b + 5, k] += s05 * w0 + s15 * w1 + s25 * w2 + s35 * w3
+
+
+@jit
+def _points_tangent(used, pt_gauss, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
+                    loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
+                    F, Q, T, R, X0, X1, d, da, co, s, g, core, Y, Kz, Kiso, Dl, Bl, CBl, t0, t1, t2, t3, t4, t5):
+    """Kz = sum over points of Pi^T [G^T Hf G + H (+ local material rows)] Pi (pattern of _expand_core).
+
+    At points without local material rows the translation-translation block of the core is A_ab I_3
+    (A = [[s0, s2/2], [s2/2, s1]]): it is accumulated as the scalar 6 x 6 matrix Kiso (added in
+    _finish_tangent), and only the rotation columns are expanded; without shear and bending weights the rest
+    of the core vanishes identically (the membrane strains are rotation-free) and the point costs nothing more.
+    """
+    for r in range(NZ):
+        for c in range(NZ):
             Kz[r, c] = 0.0
-    # points: geometric terms (+ local material rows at Gauss points), expanded into z
-    for k in range(n_used):
+    for i in range(6):
+        for j in range(6):
+            Kiso[i, j] = 0.0
+    for k in range(used.shape[0]):
         p = used[k]
-        s = Ps[p]
+        _load_point(p, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s)
         gg = pt_gauss[p]
         bend = s[3] != 0.0 or s[4] != 0.0 or s[5] != 0.0
+        if gg < 0:
+            h2 = 0.5 * s[2]
+            for i in range(6):
+                a0 = _EDN[p, 0, i]
+                a1 = _EDN[p, 1, i]
+                for j in range(6):
+                    b0 = _EDN[p, 0, j]
+                    b1 = _EDN[p, 1, j]
+                    Kiso[i, j] += s[0] * a0 * b0 + s[1] * a1 * b1 + h2 * (a0 * b1 + a1 * b0)
+            if not bend and s[6] == 0.0 and s[7] == 0.0:
+                continue
+        _strain_gradient_T(F, s, g)
         ns = 6 if (bend or gg >= 0) else 4
-        _geometric_core(s, Pg[p], PF[p], PQ[p], PT[p], PR[p], PX[p], Pd[p], Pda[p], Pco[p], core, ns, tm)
+        _geometric_core(s, g, F, Q, T, R, X0, X1, d, da, co, core, ns, gg >= 0, t0, t1, t2, t3, t4, t5)
+        if gg < 0:
+            _expand_core_rot(core, ns, p, Y, Kz)
+            continue
         if gg >= 0:
             nl = n_loc[gg]
             for li in range(nl):
-                for c in range(18):
-                    Bl[li, c] = 0.0
+                for c in range(12):
+                    Dl[li, c] = 0.0
             for q in range(loc_ptr[gg], loc_ptr[gg + 1]):
-                v = loc_v[q]
-                src = PB[p, loc_j[q]]
-                dst = Bl[loc_i[q]]
-                for c in range(18):
-                    dst[c] += v * src[c]
-            Cg = Ch[gg]
+                _add_strain_gradient_row(F, loc_j[q], loc_v[q], Dl, loc_i[q])
             for li in range(nl):
-                for c in range(18):
-                    acc = 0.0
-                    for lj in range(nl):
-                        acc += Cg[loc_rows[gg, li], loc_rows[gg, lj]] * Bl[lj, c]
-                    CBl[li, c] = acc
+                _GT_times(Dl, li, F, Q, T, R, X0, X1, Bl, li)
+            n18 = _u(Bl.shape[1])
+            nl4 = 4 * ((nl + 3) // 4)
+            for li in range(nl, nl4):      # zero rows up to a multiple of four
+                for c in range(_u(0), n18):
+                    Bl[li, c] = 0.0
+                    CBl[li, c] = 0.0
             for li in range(nl):
-                for r in range(18):
-                    b = Bl[li, r]
-                    if b != 0.0:
-                        for c in range(18):
-                            core[r, c] += b * CBl[li, c]
-        _expand_core(core, ns, _EVAL_N[p], _EVAL_DN[p], Y, Kz)
-    # nonlocal material rows (assumed membrane / shear from the tying points)
-    n_smp = smp_p.shape[0]
-    if n_smp > 0:
-        for k in range(n_smp):
-            for c in range(NDOF):
-                S[k, c] = 0.0
-            p = smp_p[k]
-            _expand_vec(PB[p, smp_j[k]], _EVAL_N[p], _EVAL_DN[p], S[k])
-        for r in range(NDOF):
-            for c in range(NDOF):
-                K1[r, c] = 0.0  # symmetric material part, upper triangle
-        for gg in range(N_GAUSS):
-            nn = n_nl[gg]
-            if nn == 0:
-                continue
-            for li in range(nn):
-                for c in range(NDOF):
-                    Bn[li, c] = 0.0
-            for q in range(nl_ptr[gg], nl_ptr[gg + 1]):
-                v = nl_v[q]
-                src = S[nl_k[q]]
-                dst = Bn[nl_i[q]]
-                for c in range(NDOF):
-                    dst[c] += v * src[c]
-            Cg = Ch[gg]
-            for li in range(nn):
-                for c in range(NDOF):
-                    acc = 0.0
-                    for lj in range(nn):
-                        acc += Cg[nl_rows[gg, li], nl_rows[gg, lj]] * Bn[lj, c]
-                    CBn[li, c] = acc
-            for li in range(nn):
-                for r in range(NDOF):
-                    b = Bn[li, r]
-                    if b != 0.0:
-                        for c in range(r, NDOF):
-                            K1[r, c] += b * CBn[li, c]
-            # coupling of local and nonlocal rows through the section (zero for a block-diagonal section)
-            nl_ = n_loc[gg]
-            cross = False
-            for li in range(nl_):
-                for lj in range(nn):
-                    if Ch[gg, loc_rows[gg, li], nl_rows[gg, lj]] != 0.0:
-                        cross = True
-            if cross:
-                _cross_terms(gg, nl_, nn, loc_rows, nl_rows, loc_ptr, loc_i, loc_j, loc_v, Ch, PB, Bn,
-                             Bl, CBn, Y, Kz)
-        for r in range(NDOF):
-            for c in range(r + 1, NDOF):
-                v = K1[r, c]
-                Kz[r, c] += v
-                Kz[c, r] += v
-            Kz[r, r] += K1[r, r]
-    _tangent_to_local(Kz, fr, Ti, K1, K_out)
-    _node_terms(f_out, fz, dn, Ti, nco, K_out, tm)
+                for c in range(_u(0), n18):
+                    CBl[li, c] = 0.0
+                for lj in range(nl):
+                    w = Ch[gg, loc_rows[gg, li], loc_rows[gg, lj]]
+                    for c in range(_u(0), n18):
+                        CBl[li, c] += w * Bl[lj, c]
+            # core += Bl^T CBl, six core rows and four B rows per loop
+            for a in range(0, nl4, 4):
+                for b in range(0, 18, 6):
+                    _rank_update_block(core, b, _u(0), Bl, CBl, a)
+        _expand_core(core, ns, p, Y, Kz)
 
 
 @jit
-def _cross_terms(gg, nl_, nn, loc_rows, nl_rows, loc_ptr, loc_i, loc_j, loc_v, Ch, PB, Bn, Bl, CBn, Y, Kz):
-    """Kz += W + W^T, W = Pi_g^T Bl^T Ch[loc, nl] Bn (a section coupling local and nonlocal rows; rare)."""
-    p = GAUSS_OFFSET + gg
-    for li in range(nl_):
-        for c in range(18):
-            Bl[li, c] = 0.0
-    for q in range(loc_ptr[gg], loc_ptr[gg + 1]):
-        v = loc_v[q]
-        for c in range(18):
-            Bl[loc_i[q], c] += v * PB[p, loc_j[q], c]
-    for li in range(nl_):
-        for c in range(NDOF):
-            acc = 0.0
-            for lj in range(nn):
-                acc += Ch[gg, loc_rows[gg, li], nl_rows[gg, lj]] * Bn[lj, c]
-            CBn[li, c] = acc
-    # Y (18 x 36) = Bl^T CBn ; W = Pi^T Y, row by row
-    for r in range(18):
-        for c in range(NDOF):
-            acc = 0.0
-            for li in range(nl_):
-                acc += Bl[li, r] * CBn[li, c]
-            Y[r, c] = acc
-    N = _EVAL_N[p]
-    dN = _EVAL_DN[p]
-    for i in range(6):
+def _nonlocal_material(par_p, par_ptr, par_j, par_v, par_rf, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
+                       PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
+                       F, Q, T, R, X0, X1, d, da, co, s, G2, phi, Sp, Wp, Cp, Yp, Kz):
+    """Kz += S^T C_par S: parameters S (z rows) and C_par = sum_g M_g^T Ch_g[nl, nl] M_g (pattern of Kz)."""
+    npar = par_p.shape[0]
+    loaded = -1
+    for kp in range(npar):
+        p = par_p[kp]
+        if p != loaded:
+            _load_point(p, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s)
+            loaded = p
+        for c in range(12):
+            G2[0, c] = 0.0
+        for q in range(par_ptr[kp], par_ptr[kp + 1]):
+            _add_strain_gradient_row(F, par_j[q], par_v[q], G2, 0)
+        _GT_times(G2, 0, F, Q, T, R, X0, X1, phi, 0)
+        if par_rf[kp]:
+            for c in range(6, 18):   # membrane combinations: rotation-free (their rotation slots are round-off)
+                phi[0, c] = 0.0
+        for c in range(NZ):
+            Sp[kp, c] = 0.0
+        _expand_vec(phi, 0, p, Sp, kp)
+    for a in range(npar):
+        for b in range(npar):
+            Cp[a, b] = 0.0
+    for gg in range(N_GAUSS):
+        nn = n_nl[gg]
+        if nn == 0:
+            continue
+        for li in range(nn):
+            for b in range(npar):
+                Yp[li, b] = 0.0
+        # Yp = Ch_g[nl, nl] M_g ; Cp += M_g^T Yp
+        for q in range(m_ptr[gg], m_ptr[gg + 1]):
+            v = m_v[q]
+            col = nl_rows[gg, m_i[q]]
+            b = m_k[q]
+            for li in range(nn):
+                Yp[li, b] += v * Ch[gg, nl_rows[gg, li], col]
+        for q in range(m_ptr[gg], m_ptr[gg + 1]):
+            v = m_v[q]
+            a = m_k[q]
+            li = m_i[q]
+            for b in range(_u(0), _u(npar)):
+                Cp[a, b] += v * Yp[li, b]
+    # Wp = Cp Sp ; Kz += Sp^T Wp on the pattern of _expand_core (rows padded to a multiple of four)
+    nz = _u(Kz.shape[1])
+    np4 = 4 * ((npar + 3) // 4)
+    for a in range(npar, np4):
+        for c in range(_u(0), nz):
+            Sp[a, c] = 0.0
+            Wp[a, c] = 0.0
+    for a in range(npar):
+        for c in range(_u(0), nz):
+            Wp[a, c] = 0.0
+        for b in range(0, npar - 3, 4):
+            w0 = Cp[a, b]
+            w1 = Cp[a, b + 1]
+            w2 = Cp[a, b + 2]
+            w3 = Cp[a, b + 3]
+            for c in range(_u(0), nz):
+                Wp[a, c] += w0 * Sp[b, c] + w1 * Sp[b + 1, c] + w2 * Sp[b + 2, c] + w3 * Sp[b + 3, c]
+        for b in range(4 * (npar // 4), npar):
+            w0 = Cp[a, b]
+            for c in range(_u(0), nz):
+                Wp[a, c] += w0 * Sp[b, c]
+    for a in range(0, np4, 4):
+        rot = False
+        for b in range(a, min(a + 4, npar)):
+            if not par_rf[b]:
+                rot = True
         for c in range(3):
-            for k in range(NDOF):
-                w = dN[0, i] * Y[c, k] + dN[1, i] * Y[3 + c, k]
-                Kz[6 * i + c, k] += w
-                Kz[k, 6 * i + c] += w
-            if i == 0:
-                for k in range(NDOF):
-                    w = Y[6 + c, k]
-                    Kz[3 + c, k] += w
-                    Kz[k, 3 + c] += w
-            else:
-                for k in range(NDOF):
-                    w = N[i] * Y[9 + c, k] + dN[0, i] * Y[12 + c, k] + dN[1, i] * Y[15 + c, k]
-                    Kz[6 * i + 3 + c, k] += w
-                    Kz[k, 6 * i + 3 + c] += w
+            _rank_update_block(Kz, 8 * c, _u(0), Sp, Wp, a)
+            if rot:
+                _rank_update_block(Kz, _ZR + 8 * c, _u(_KR), Sp, Wp, a)
+
+
+@jit
+def _has_cross_coupling(Ch, loc_rows, n_loc, nl_rows, n_nl):
+    """Does the section couple local and nonlocal rows at some Gauss point (not for a block-diagonal one)?"""
+    for gg in range(N_GAUSS):
+        for li in range(n_loc[gg]):
+            for lj in range(n_nl[gg]):
+                if Ch[gg, loc_rows[gg, li], nl_rows[gg, lj]] != 0.0:
+                    return True
+    return False
+
+
+@jit
+def _cross_terms(loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
+                 Ch, Sp, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s,
+                 Dl, Bl, Bn, Y, Yt, W, Kz):
+    """Kz += W + W^T, W = sum_g Pi_g^T Bl_g^T Ch_g[loc, nl] Bn_g, Bn_g = M_g S (a coupling section; rare).
+
+    The array W receives W^T; the symmetric sum is the same."""
+    for r in range(NZ):
+        for c in range(NZ):
+            W[r, c] = 0.0
+    for gg in range(N_GAUSS):
+        nl = n_loc[gg]
+        nn = n_nl[gg]
+        if nl == 0 or nn == 0:
+            continue
+        p = GAUSS_OFFSET + gg
+        _load_point(p, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s)
+        for li in range(nl):
+            for c in range(12):
+                Dl[li, c] = 0.0
+        for q in range(loc_ptr[gg], loc_ptr[gg + 1]):
+            _add_strain_gradient_row(F, loc_j[q], loc_v[q], Dl, loc_i[q])
+        for li in range(nl):
+            _GT_times(Dl, li, F, Q, T, R, X0, X1, Bl, li)
+        for li in range(nn):
+            for c in range(NZ):
+                Bn[li, c] = 0.0
+        for q in range(m_ptr[gg], m_ptr[gg + 1]):
+            for c in range(NZ):
+                Bn[m_i[q], c] += m_v[q] * Sp[m_k[q], c]
+        # Y (18 x NZ) = Bl^T Ch[loc, nl] Bn
+        for r in range(18):
+            for c in range(NZ):
+                Y[r, c] = 0.0
+        for li in range(nl):
+            for lj in range(nn):
+                w = Ch[gg, loc_rows[gg, li], nl_rows[gg, lj]]
+                if w != 0.0:
+                    for r in range(18):
+                        b = w * Bl[li, r]
+                        for c in range(NZ):
+                            Y[r, c] += b * Bn[lj, c]
+        # W^T += (Pi_g^T Y)^T, row by row through Yt = Y^T
+        for c in range(NZ):
+            for r in range(18):
+                Yt[c, r] = Y[r, c]
+            _expand_vec(Yt, c, p, W, c)
+    for r in range(NZ):
+        c0 = 8 * (r // 8) if r < _ZR else _ZR
+        for c in range(c0, NZ):
+            Kz[r, c] += W[r, c] + W[c, r]
+
+
+@jit
+def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, K2, T0, K, Dp, Dm):
+    """K[e] = P^T Kz P + (D P^T[.]) fz (Kz on the accumulation pattern: mirror the symmetric part first).
+
+    Kiso (6 x 6) is the scalar translation-translation part accumulated separately (times I_3).
+    """
+    for c in range(3):
+        for i in range(6):
+            for j in range(6):
+                Kz[8 * c + i, 8 * c + j] += Kiso[i, j]
+    for c in range(2):
+        for i in range(6):
+            r = 8 * c + i
+            for k in range(8 * (c + 1), _ZR):
+                Kz[k, r] = Kz[r, k]
+    for r in range(_ZR):
+        for k in range(_ZR, NZ):
+            Kz[k, r] = Kz[r, k]
+    # K1 = Kz P  (z rows, h columns; padding rows are zero and skipped)
+    for rc in range(6):
+        for ri in range(6):
+            r = 8 * rc + ri
+            for i in range(6):
+                k0 = Kz[r, i]
+                k1 = Kz[r, 8 + i]
+                k2 = Kz[r, 16 + i]
+                for c in range(3):
+                    K1[r, 6 * i + c] = k0 * fr[i, 0, c] + k1 * fr[i, 1, c] + k2 * fr[i, 2, c]
+            t0 = Kz[r, _ZR]
+            t1 = Kz[r, _ZR + 8]
+            t2 = Kz[r, _ZR + 16]
+            for i in range(1, 6):
+                k0 = Kz[r, _ZR + i]
+                k1 = Kz[r, _ZR + 8 + i]
+                k2 = Kz[r, _ZR + 16 + i]
+                for c in range(3):
+                    K1[r, 6 * i + 3 + c] = k0 * Ti[i, 0, c] + k1 * Ti[i, 1, c] + k2 * Ti[i, 2, c]
+                # - Kz[r, d_i] T_i^T
+                t0 -= k0 * Ti[i, 0, 0] + k1 * Ti[i, 0, 1] + k2 * Ti[i, 0, 2]
+                t1 -= k0 * Ti[i, 1, 0] + k1 * Ti[i, 1, 1] + k2 * Ti[i, 1, 2]
+                t2 -= k0 * Ti[i, 2, 0] + k1 * Ti[i, 2, 1] + k2 * Ti[i, 2, 2]
+            K1[r, 3] = t0
+            K1[r, 4] = t1
+            K1[r, 5] = t2
+    # K2 = P^T K1 (per node: three output rows from three source rows in one loop)
+    n36 = _u(K2.shape[1])
+    for i in range(6):
+        r00 = fr[i, 0, 0]
+        r01 = fr[i, 0, 1]
+        r02 = fr[i, 0, 2]
+        r10 = fr[i, 1, 0]
+        r11 = fr[i, 1, 1]
+        r12 = fr[i, 1, 2]
+        r20 = fr[i, 2, 0]
+        r21 = fr[i, 2, 1]
+        r22 = fr[i, 2, 2]
+        o = 6 * i
+        for k in range(_u(0), n36):
+            a = K1[i, k]
+            b = K1[8 + i, k]
+            t = K1[16 + i, k]
+            K2[o, k] = r00 * a + r10 * b + r20 * t
+            K2[o + 1, k] = r01 * a + r11 * b + r21 * t
+            K2[o + 2, k] = r02 * a + r12 * b + r22 * t
+    for k in range(_u(0), n36):
+        T0[0, k] = K1[_ZR, k]
+        T0[1, k] = K1[_ZR + 8, k]
+        T0[2, k] = K1[_ZR + 16, k]
+    for i in range(1, 6):
+        t00 = Ti[i, 0, 0]
+        t01 = Ti[i, 0, 1]
+        t02 = Ti[i, 0, 2]
+        t10 = Ti[i, 1, 0]
+        t11 = Ti[i, 1, 1]
+        t12 = Ti[i, 1, 2]
+        t20 = Ti[i, 2, 0]
+        t21 = Ti[i, 2, 1]
+        t22 = Ti[i, 2, 2]
+        o = 6 * i + 3
+        for k in range(_u(0), n36):
+            a = K1[_ZR + i, k]
+            b = K1[_ZR + 8 + i, k]
+            t = K1[_ZR + 16 + i, k]
+            K2[o, k] = t00 * a + t10 * b + t20 * t          # T_i^T
+            K2[o + 1, k] = t01 * a + t11 * b + t21 * t
+            K2[o + 2, k] = t02 * a + t12 * b + t22 * t
+        for k in range(_u(0), n36):
+            a = K1[_ZR + i, k]
+            b = K1[_ZR + 8 + i, k]
+            t = K1[_ZR + 16 + i, k]
+            T0[0, k] -= t00 * a + t01 * b + t02 * t         # - T_i
+            T0[1, k] -= t10 * a + t11 * b + t12 * t
+            T0[2, k] -= t20 * a + t21 * b + t22 * t
+    for r in range(NDOF):
+        if r == 3 or r == 4 or r == 5:
+            for k in range(_u(0), n36):
+                K[e, r, k] = T0[r - 3, k]
+        else:
+            for k in range(_u(0), n36):
+                K[e, r, k] = K2[r, k]
+    # node terms: hat(f_u,I) in (u_I, theta_I) and the D T^-1 terms of Delta(delta d_I)
+    for i in range(6):
+        u0 = f[e, 6 * i]
+        u1 = f[e, 6 * i + 1]
+        u2 = f[e, 6 * i + 2]
+        r = 6 * i
+        c = 6 * i + 3
+        K[e, r, c + 1] -= u2
+        K[e, r, c + 2] += u1
+        K[e, r + 1, c] += u2
+        K[e, r + 1, c + 2] -= u0
+        K[e, r + 2, c] -= u1
+        K[e, r + 2, c + 1] += u0
+    for i in range(1, 6):
+        e0 = fz[0, _ZR + i]
+        e1 = fz[0, _ZR + 8 + i]
+        e2 = fz[0, _ZR + 16 + i]
+        _dtan_inv_to(dn[i, 0], dn[i, 1], dn[i, 2], e0, e1, e2, ninv[i, 0], ninv[i, 1], Dp)
+        # D T^-1(-d)[.] e = -hat(e) - D T^-1(d)[.] e
+        for r in range(3):
+            for c in range(3):
+                Dm[r, c] = -Dp[r, c]
+        Dm[0, 1] += e2
+        Dm[0, 2] -= e1
+        Dm[1, 0] -= e2
+        Dm[1, 2] += e0
+        Dm[2, 0] += e1
+        Dm[2, 1] -= e0
+        t = 6 * i + 3
+        for r in range(3):
+            for c in range(3):
+                mT = Dm[r, 0] * Ti[i, 0, c] + Dm[r, 1] * Ti[i, 1, c] + Dm[r, 2] * Ti[i, 2, c]    # Dm T_i
+                mTt = Dm[r, 0] * Ti[i, c, 0] + Dm[r, 1] * Ti[i, c, 1] + Dm[r, 2] * Ti[i, c, 2]   # Dm T_i^T
+                pT = Dp[r, 0] * Ti[i, 0, c] + Dp[r, 1] * Ti[i, 1, c] + Dp[r, 2] * Ti[i, 2, c]
+                pTt = Dp[r, 0] * Ti[i, c, 0] + Dp[r, 1] * Ti[i, c, 1] + Dp[r, 2] * Ti[i, c, 2]
+                K[e, t + r, t + c] -= mT
+                K[e, t + r, 3 + c] += mTt
+                K[e, 3 + r, t + c] -= pT
+                K[e, 3 + r, 3 + c] += pTt
 
 
 # ----------------------------------------------------------------------------------------------------------
-# Strains only
+# Element loops
 # ----------------------------------------------------------------------------------------------------------
 
 
 @jit
-def _element_strains(x, fr, e_ref, to_cart, used, nz_g, nz_i, nz_p, nz_j, nz_v, out,
-                     dn, Ti, nco, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, cov):
-    _node_setup(fr, dn, Ti, nco)
-    for k in range(used.shape[0]):
-        p = used[k]
-        _point_kinematics(x, fr, dn, _EVAL_N[p], _EVAL_DN[p], Pd[p], Pda[p], Pco[p], PQ[p], PT[p], PR[p],
-                          PF[p], PX[p], False)
-        _covariant_strains(PF[p], e_ref[p], Pe[p])
-    for gg in range(N_GAUSS):
-        for i in range(8):
-            cov[gg, i] = 0.0
-    for q in range(nz_g.shape[0]):
-        cov[nz_g[q], nz_i[q]] += nz_v[q] * Pe[nz_p[q], nz_j[q]]
-    for gg in range(N_GAUSS):
-        for r in range(8):
-            acc = 0.0
-            for c in range(8):
-                acc += to_cart[gg, r, c] * cov[gg, c]
-            out[gg, r] = acc
-
-
-# ----------------------------------------------------------------------------------------------------------
-# Batches
-# ----------------------------------------------------------------------------------------------------------
+def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C,
+           used, nz_g, nz_i, nz_p, nz_j, nz_v,
+           pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
+           par_p, par_ptr, par_j, par_v, par_rf, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
+           want_tangent, f, K,
+           x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps,
+           F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz,
+           cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, K2, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
+           t0, t1, t2, t3, t4, t5):
+    """Internal forces f[e] (and tangents K[e]) of the elements e0 <= e < e1."""
+    for e in range(e0, e1):
+        _load_element(e, x_el, fr_el, x, fr)
+        _node_setup(fr, dn, Ti, ninv, t0)
+        _interpolate_points(used, dn, Pd, Pda)
+        _point_coefficients(used, Pd, Pco)
+        _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, True)
+        _strains_points(e, used, e_ref, PF, Pe)
+        if want_tangent:
+            _section_cov(e, to_cart, weights, C, CT, Ch)
+        _stress_weights(e, used, to_cart, weights, C, Ch, want_tangent, nz_g, nz_i, nz_p, nz_j, nz_v, Pe, cov, st,
+                        v16, Ps)
+        _force_points(used, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz)
+        _force_to_local(e, fz, fr, Ti, f)
+        if not want_tangent:
+            continue
+        _points_tangent(used, pt_gauss, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
+                        loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
+                        F, Q, T, R, X0, X1, d, da, co, s, g, core, Y, Kz, Kiso, Dl, Bl, CBl, t0, t1, t2, t3, t4, t5)
+        if par_p.shape[0] > 0:
+            _nonlocal_material(par_p, par_ptr, par_j, par_v, par_rf, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
+                               PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
+                               F, Q, T, R, X0, X1, d, da, co, s, G2, phi, Sp, Wp, Cp, Yp, Kz)
+            if _has_cross_coupling(Ch, loc_rows, n_loc, nl_rows, n_nl):
+                _cross_terms(loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
+                             Ch, Sp, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s,
+                             Dl, Bl, Wp, Y, Yt, K1, Kz)
+        _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, K2, T0, K, t0, t1)
 
 
 @numba.njit(cache=True, parallel=True)
-def _batch(x_el, fr_el, e_ref, to_cart, weights, C, used, nz_g, nz_i, nz_p, nz_j, nz_v,
-           need_b, pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
-           nl_rows, n_nl, nl_ptr, nl_i, nl_k, nl_v, smp_p, smp_j,
+def _batch(x_el, fr_el, e_ref, to_cart, weights, C,
+           used, nz_g, nz_i, nz_p, nz_j, nz_v,
+           pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
+           par_p, par_ptr, par_j, par_v, par_rf, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
            want_tangent, n_chunks, f, K):
     m = x_el.shape[0]
-    n_smp = max(smp_p.shape[0], 1)
+    npar = max(par_p.shape[0], 1)
     for ch in prange(n_chunks):
         # per-chunk workspaces (a few chunks per thread), reused for every element of the chunk
+        x = np.empty((6, 3))
+        fr = np.empty((6, 3, 3))
         dn = np.empty((6, 3))
         Ti = np.empty((6, 3, 3))
-        nco = np.empty((6, 9))
+        ninv = np.empty((6, 2))
         Pd = np.empty((N_EVAL, 3))
         Pda = np.empty((N_EVAL, 2, 3))
         Pco = np.empty((N_EVAL, 9))
@@ -1066,43 +1520,79 @@ def _batch(x_el, fr_el, e_ref, to_cart, weights, C, used, nz_g, nz_i, nz_p, nz_j
         PX = np.empty((N_EVAL, 2, 3, 3))
         Pe = np.empty((N_EVAL, 8))
         Ps = np.empty((N_EVAL, 8))
-        Pg = np.empty((N_EVAL, 12))
-        PB = np.empty((N_EVAL, 8, 18))
+        F = np.empty((4, 3))
+        Q = np.empty((3, 3))
+        T = np.empty((3, 3))
+        R = np.empty((3, 3))
+        X0 = np.empty((3, 3))
+        X1 = np.empty((3, 3))
+        d = np.empty(3)
+        da = np.empty((2, 3))
+        co = np.empty(9)
+        s = np.empty(8)
+        g = np.empty(12)
+        G2 = np.empty((1, 12))
+        phi = np.empty((1, 18))
+        fz = np.empty((1, NZ))
         cov = np.empty((N_GAUSS, 8))
         st = np.empty((N_GAUSS, 8))
         Ch = np.empty((N_GAUSS, 8, 8))
-        phi = np.empty(18)
-        fz = np.empty(NDOF)
-        g12 = np.empty(12)
+        CT = np.empty((8, 8))
+        v16 = np.empty(16)
         core = np.empty((18, 18))
-        Y = np.empty((18, NDOF))
-        Kz = np.empty((NDOF, NDOF))
-        K1 = np.empty((NDOF, NDOF))
-        S = np.empty((n_smp, NDOF))
+        Y = np.empty((18, NZ))
+        Yt = np.empty((NZ, 18))
+        Kz = np.empty((NZ, NZ))
+        K1 = np.empty((NZ, NZ))
+        K2 = np.empty((NDOF, NDOF))
+        T0 = np.empty((3, NDOF))
+        Kiso = np.empty((6, 6))
+        Dl = np.empty((8, 12))
         Bl = np.empty((8, 18))
         CBl = np.empty((8, 18))
-        Bn = np.empty((8, NDOF))
-        CBn = np.empty((8, NDOF))
-        tm = np.empty((8, 3, 3))
-        e0 = (ch * m) // n_chunks
-        e1 = ((ch + 1) * m) // n_chunks
-        for e in range(e0, e1):
-            Ke = K[e] if want_tangent else K[0]
-            _element(x_el[e], fr_el[e], e_ref[e], to_cart[e], weights[e], C, used, nz_g, nz_i, nz_p, nz_j, nz_v,
-                     need_b, pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
-                     nl_rows, n_nl, nl_ptr, nl_i, nl_k, nl_v, smp_p, smp_j,
-                     want_tangent, f[e], Ke,
-                     dn, Ti, nco, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps, Pg, PB,
-                     cov, st, Ch, phi, fz, g12, core, Y, Kz, K1, S, Bl, CBl, Bn, CBn, tm)
+        Sp = np.empty((4 * ((npar + 3) // 4), NZ))
+        Wp = np.empty((max(4 * ((npar + 3) // 4), 8), NZ))
+        Cp = np.empty((npar, npar))
+        Yp = np.empty((8, npar))
+        t0 = np.empty((3, 3))
+        t1 = np.empty((3, 3))
+        t2 = np.empty((3, 3))
+        t3 = np.empty((3, 3))
+        t4 = np.empty((3, 3))
+        t5 = np.empty((3, 3))
+        _chunk((ch * m) // n_chunks, ((ch + 1) * m) // n_chunks, x_el, fr_el, e_ref, to_cart, weights, C,
+               used, nz_g, nz_i, nz_p, nz_j, nz_v,
+               pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
+               par_p, par_ptr, par_j, par_v, par_rf, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
+               want_tangent, f, K,
+               x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps,
+               F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz,
+               cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, K2, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
+               t0, t1, t2, t3, t4, t5)
+
+
+@jit
+def _chunk_strains(e0, e1, x_el, fr_el, e_ref, to_cart, used, nz_g, nz_i, nz_p, nz_j, nz_v, out,
+                   x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, cov, t0):
+    for e in range(e0, e1):
+        _load_element(e, x_el, fr_el, x, fr)
+        _node_setup(fr, dn, Ti, ninv, t0)
+        _interpolate_points(used, dn, Pd, Pda)
+        _point_coefficients(used, Pd, Pco)
+        _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, False)
+        _strains_points(e, used, e_ref, PF, Pe)
+        _gauss_strains(e, to_cart, nz_g, nz_i, nz_p, nz_j, nz_v, Pe, cov, out)
 
 
 @numba.njit(cache=True, parallel=True)
 def _batch_strains(x_el, fr_el, e_ref, to_cart, used, nz_g, nz_i, nz_p, nz_j, nz_v, n_chunks, out):
     m = x_el.shape[0]
     for ch in prange(n_chunks):
+        x = np.empty((6, 3))
+        fr = np.empty((6, 3, 3))
         dn = np.empty((6, 3))
         Ti = np.empty((6, 3, 3))
-        nco = np.empty((6, 9))
+        ninv = np.empty((6, 2))
         Pd = np.empty((N_EVAL, 3))
         Pda = np.empty((N_EVAL, 2, 3))
         Pco = np.empty((N_EVAL, 9))
@@ -1113,11 +1603,10 @@ def _batch_strains(x_el, fr_el, e_ref, to_cart, used, nz_g, nz_i, nz_p, nz_j, nz
         PX = np.empty((N_EVAL, 2, 3, 3))
         Pe = np.empty((N_EVAL, 8))
         cov = np.empty((N_GAUSS, 8))
-        e0 = (ch * m) // n_chunks
-        e1 = ((ch + 1) * m) // n_chunks
-        for e in range(e0, e1):
-            _element_strains(x_el[e], fr_el[e], e_ref[e], to_cart[e], used, nz_g, nz_i, nz_p, nz_j, nz_v, out[e],
-                             dn, Ti, nco, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, cov)
+        t0 = np.empty((3, 3))
+        _chunk_strains((ch * m) // n_chunks, ((ch + 1) * m) // n_chunks, x_el, fr_el, e_ref, to_cart, used,
+                       nz_g, nz_i, nz_p, nz_j, nz_v, out, x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX,
+                       Pe, cov, t0)
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -1125,13 +1614,44 @@ def _batch_strains(x_el, fr_el, e_ref, to_cart, used, nz_g, nz_i, nz_p, nz_j, nz
 # ----------------------------------------------------------------------------------------------------------
 
 
+def _row_basis(M: np.ndarray, tol: float) -> np.ndarray:
+    """Reduced row-echelon basis of the row space of M (sparse rows with unit pivots)."""
+    M = M.copy()
+    rows, cols = M.shape
+    basis, r = [], 0
+    for c in range(cols):
+        if r == rows:
+            break
+        piv = r + int(np.argmax(np.abs(M[r:, c])))
+        if abs(M[piv, c]) <= tol:
+            continue
+        M[[r, piv]] = M[[piv, r]]
+        M[r] /= M[r, c]
+        for k in range(rows):
+            if k != r:
+                M[k] -= M[k, c] * M[r]
+        r += 1
+    basis = M[:r]
+    basis[np.abs(basis) <= tol] = 0.0
+    return basis
+
+
 class CompressedMaps:
-    """Sparse form of A (7, 8, 17, 8) for the kernels (see the module docstring)."""
+    """Sparse form of an assumed-strain map A (7, 8, 17, 8) for the kernels (see the module docstring).
+
+    * all nonzeros (g, i, p, j, v): strains and the pull-back of the stress resultants;
+    * local rows of each Gauss point (entries referring only to the point itself): in the point's slots;
+    * nonlocal rows: A_nl = M E, E the row-echelon bases of the sampled components used at each point
+      ("parameters", e.g. e_qq = (e_rr + e_ss)/2 - e_rs at a hypotenuse tying point), M the sparse
+      combination per Gauss point row. The factorization is verified to round-off.
+    """
 
     def __init__(self, A: np.ndarray) -> None:
         A = np.asarray(A, dtype=np.float64)
         if A.shape != (N_GAUSS, 8, N_EVAL, 8):
             raise ValueError(f"A must have shape {(N_GAUSS, 8, N_EVAL, 8)}, got {A.shape}")
+        if not np.all(np.isfinite(A)):
+            raise ValueError("A must be finite")
         g, i, p, j = np.nonzero(A)
         v = A[g, i, p, j]
         self.nz_g, self.nz_i, self.nz_p, self.nz_j = (a.astype(np.int64) for a in (g, i, p, j))
@@ -1142,7 +1662,8 @@ class CompressedMaps:
         has = np.zeros((N_GAUSS, 8), bool)
         other = np.zeros((N_GAUSS, 8), bool)
         has[g, i] = True
-        other[g[p != own[g]], i[p != own[g]]] = True
+        far = p != own[g]
+        other[g[far], i[far]] = True
         local = has & ~other
         nonlocal_ = has & other
         self.loc_rows = np.zeros((N_GAUSS, 8), np.int64)
@@ -1164,35 +1685,77 @@ class CompressedMaps:
         self.loc_j = j[is_loc][order].astype(np.int64)
         self.loc_v = v[is_loc][order]
         self.loc_ptr = np.searchsorted(g[is_loc][order], np.arange(N_GAUSS + 1)).astype(np.int64)
-        # nonlocal entries refer to sampled rows (p, j)
-        is_nl = ~is_loc
-        pairs = sorted({(int(pp), int(jj)) for pp, jj in zip(p[is_nl], j[is_nl])})
-        sample_index = {pair: k for k, pair in enumerate(pairs)}
-        self.smp_p = np.array([pp for pp, _ in pairs], np.int64)
-        self.smp_j = np.array([jj for _, jj in pairs], np.int64)
-        order = np.argsort(g[is_nl], kind="stable")
-        gn, in_, pn, jn, vn = g[is_nl][order], i[is_nl][order], p[is_nl][order], j[is_nl][order], v[is_nl][order]
-        self.nl_i = nl_index[gn, in_].astype(np.int64)
-        self.nl_k = np.array([sample_index[(int(a), int(b))] for a, b in zip(pn, jn)], np.int64)
-        self.nl_v = vn
-        self.nl_ptr = np.searchsorted(gn, np.arange(N_GAUSS + 1)).astype(np.int64)
-        self.need_b = np.zeros((N_EVAL, 8), bool)
-        self.need_b[self.smp_p, self.smp_j] = True
-        for gg in range(N_GAUSS):
-            self.need_b[own[gg], self.loc_j[self.loc_ptr[gg]:self.loc_ptr[gg + 1]]] = True
         self.pt_gauss = -np.ones(N_EVAL, np.int64)
         for gg in range(N_GAUSS):
             if self.n_loc[gg] > 0:
                 self.pt_gauss[own[gg]] = gg
+        self._factor_nonlocal(A, nonlocal_, nl_index)
+
+    def _factor_nonlocal(self, A, nonlocal_, nl_index) -> None:
+        # dense A_nl: rows (g, nonlocal row), columns (point, component)
+        row_of = [(gg, int(r)) for gg in range(N_GAUSS) for r in np.flatnonzero(nonlocal_[gg])]
+        A_nl = np.array([A[gg, r].ravel() for gg, r in row_of]).reshape(len(row_of), N_EVAL * 8)
+        scale = np.abs(A_nl).max() if A_nl.size else 1.0
+        tol = 1e-12 * scale
+        E_rows, par_p = [], []
+        for pp in range(N_EVAL):
+            sub = A_nl[:, 8 * pp:8 * pp + 8] if A_nl.size else np.zeros((0, 8))
+            if not np.any(np.abs(sub) > tol):
+                continue
+            for row in _row_basis(sub, tol):
+                full = np.zeros(N_EVAL * 8)
+                full[8 * pp:8 * pp + 8] = row
+                E_rows.append(full)
+                par_p.append(pp)
+        E = np.array(E_rows).reshape(len(E_rows), N_EVAL * 8)
+        # rotation-free (membrane) combinations first: groups of four of them skip the rotation rows
+        rot_free = np.array([bool(np.all(np.flatnonzero(row) % 8 < 3)) for row in E], bool)
+        order = np.argsort(~rot_free, kind="stable")
+        E, rot_free = E[order], rot_free[order]
+        par_p = [par_p[k] for k in order]
+        self.par_rf = rot_free.astype(np.int64)
+        if len(E_rows):
+            M = np.linalg.lstsq(E.T, A_nl.T, rcond=None)[0].T       # A_nl = M E
+            M[np.abs(M) <= 1e-14 * np.abs(M).max()] = 0.0
+            if np.abs(M @ E - A_nl).max() > 1e-13 * scale:
+                raise ValueError("could not factor the nonlocal assumed-strain rows")
+        else:
+            M = np.zeros((len(row_of), 0))
+        self.par_p = np.array(par_p, np.int64)
+        ptr, pj, pv = [0], [], []
+        for row in E:
+            (nzc,) = np.nonzero(row)
+            pj.extend(int(c) % 8 for c in nzc)
+            pv.extend(row[nzc])
+            ptr.append(len(pj))
+        self.par_ptr = np.array(ptr, np.int64)
+        self.par_j = np.array(pj, np.int64)
+        self.par_v = np.array(pv, np.float64)
+        mg, mi, mk, mv = [], [], [], []
+        for r, (gg, row) in enumerate(row_of):
+            for k in np.flatnonzero(M[r]):
+                mg.append(gg)
+                mi.append(nl_index[gg, row])
+                mk.append(int(k))
+                mv.append(M[r, k])
+        mg = np.array(mg, np.int64)
+        self.m_ptr = np.searchsorted(mg, np.arange(N_GAUSS + 1)).astype(np.int64)
+        self.m_i = np.array(mi, np.int64)
+        self.m_k = np.array(mk, np.int64)
+        self.m_v = np.array(mv, np.float64)
+
+    @property
+    def n_parameters(self) -> int:
+        return len(self.par_p)
 
     def nonzeros(self):
         return self.used, self.nz_g, self.nz_i, self.nz_p, self.nz_j, self.nz_v
 
     def kernel_args(self):
         return (self.used, self.nz_g, self.nz_i, self.nz_p, self.nz_j, self.nz_v,
-                self.need_b, self.pt_gauss, self.loc_rows, self.n_loc, self.loc_ptr, self.loc_i, self.loc_j,
-                self.loc_v, self.nl_rows, self.n_nl, self.nl_ptr, self.nl_i, self.nl_k, self.nl_v,
-                self.smp_p, self.smp_j)
+                self.pt_gauss, self.loc_rows, self.n_loc, self.loc_ptr, self.loc_i, self.loc_j, self.loc_v,
+                self.par_p, self.par_ptr, self.par_j, self.par_v, self.par_rf, self.nl_rows, self.n_nl,
+                self.m_ptr, self.m_i, self.m_k, self.m_v)
 
 
 _MAP_CACHE: dict[bytes, CompressedMaps] = {}
@@ -1226,13 +1789,15 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
                                  A: np.ndarray, want_tangent: bool = True):
     """Internal forces (m, 36) and tangents (m, 36, 36) of m elements, per node [u, theta], local frames.
 
+    Same result as :func:`flexbody.shell.element_reference.internal_force_tangent` element by element.
+
     Parameters
     ----------
     x_el : (m, 6, 3) nodal positions;  frames_el : (m, 6, 3, 3) nodal frames
     e_ref : (m, 17, 8), to_cart : (m, 7, 8, 8), weights : (m, 7)  reference data (geometry.element_geometry)
     section : (8, 8) symmetric section stiffness
     A : (7, 8, 17, 8) assumed-strain map (element_reference.assumed_strain_maps(tying))
-    want_tangent : False gives the residual-only path (no tangent, no second variation); K is then None.
+    want_tangent : False takes the residual-only path (no tangent, no second variation); K is then None.
     """
     x_el = _as(x_el, (6, 3), "x_el")
     m = x_el.shape[0]
@@ -1245,28 +1810,32 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
     C = np.ascontiguousarray(section, dtype=np.float64)
     if C.shape != (8, 8):
         raise ValueError(f"section must be (8, 8), got {C.shape}")
-    if not np.allclose(C, C.T, rtol=1e-12, atol=1e-12 * np.abs(C).max()):
+    if not np.allclose(C, C.T, rtol=0.0, atol=1e-13 * np.abs(C).max()):
         raise ValueError("section stiffness must be symmetric")
     maps = compress_maps(A)
-    f = np.zeros((m, NDOF))
-    K = np.zeros((m, NDOF, NDOF)) if want_tangent else np.zeros((1, NDOF, NDOF))
-    if m == 0:
-        return f, (K if want_tangent else None)
-    _batch(x_el, frames_el, e_ref, to_cart, weights, C, *maps.kernel_args(),
-           bool(want_tangent), _n_chunks(m), f, K)
+    f = np.empty((m, NDOF))
+    K = np.empty((m, NDOF, NDOF)) if want_tangent else np.empty((1, NDOF, NDOF))
+    if m:
+        _batch(x_el, frames_el, e_ref, to_cart, weights, C, *maps.kernel_args(),
+               bool(want_tangent), _n_chunks(m), f, K)
     return f, (K if want_tangent else None)
 
 
 def element_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.ndarray, to_cart: np.ndarray,
                           A: np.ndarray) -> np.ndarray:
-    """Cartesian strains [membrane | bending | shear] at the 7 Gauss points of m elements, (m, 7, 8)."""
+    """Cartesian strains [membrane | bending | shear] at the 7 Gauss points of m elements, (m, 7, 8).
+
+    Same result as :func:`flexbody.shell.element_reference.element_strains` element by element.
+    """
     x_el = _as(x_el, (6, 3), "x_el")
     m = x_el.shape[0]
     frames_el = _as(frames_el, (6, 3, 3), "frames_el")
     e_ref = _as(e_ref, (N_EVAL, 8), "e_ref")
     to_cart = _as(to_cart, (N_GAUSS, 8, 8), "to_cart")
+    if not (len(frames_el) == len(e_ref) == len(to_cart) == m):
+        raise ValueError("all element arrays must have the same number of elements")
     maps = compress_maps(A)
-    out = np.zeros((m, N_GAUSS, 8))
+    out = np.empty((m, N_GAUSS, 8))
     if m:
         _batch_strains(x_el, frames_el, e_ref, to_cart, *maps.nonzeros(), _n_chunks(m), out)
     return out

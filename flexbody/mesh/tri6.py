@@ -1,0 +1,281 @@
+"""The six-node triangle mesh: nodes, connectivity, reference directors, named node and edge sets.
+
+Connectivity follows :mod:`flexbody.shell.shape`: corners 1, 2, 3 first, then the midside nodes
+4 = (1, 2), 5 = (2, 3), 6 = (3, 1), counter-clockwise seen from the reference director. An edge of an edge set
+is a node triple (corner, midside, corner).
+
+Every mesh is validated when it is made (:func:`validate`): a bad mesh fails with a :class:`MeshError` that
+names the element or node, never later inside a numba kernel.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+from flexbody.shell.shape import gauss_triangle_7, shape_derivatives, shape_functions
+
+#: local node triples (corner, midside, corner) of the three element edges
+ELEMENT_EDGES = np.array([[0, 3, 1], [1, 4, 2], [2, 5, 0]])
+
+#: a midside node may sit at most this fraction of its edge's chord away from the chord's midpoint
+MIDSIDE_TOLERANCE = 0.25
+
+# points at which the Jacobian sign is checked: corners, midside nodes and the 7 Gauss points
+_CHECK_POINTS = np.vstack([[[0, 0], [1, 0], [0, 1], [0.5, 0], [0.5, 0.5], [0, 0.5]], gauss_triangle_7()[0]])
+_CHECK_DN = np.array([shape_derivatives(r, s) for r, s in _CHECK_POINTS])  # (13, 2, 6)
+
+
+class MeshError(ValueError):
+    """An invalid mesh; the message names the offending element, node, set or file."""
+
+
+@dataclass(frozen=True, eq=False)
+class Tri6Mesh:
+    """A six-node triangle mesh of a shell's reference surface.
+
+    Parameters
+    ----------
+    nodes : (n, 3) node coordinates
+    elements : (m, 6) node indices per element (corners, then midside nodes 4=(1,2), 5=(2,3), 6=(3,1))
+    directors : (n, 3) unit reference directors (shell normals) at the nodes
+    node_sets : named sets of node indices
+    edge_sets : named sets of element edges, each a (k, 3) array of (corner, midside, corner) triples
+    allow_coincident_nodes : a deliberate slit or crack (the slit annular plate) has distinct coincident
+        nodes on its two lips; otherwise coincident nodes are reported as duplicates.
+    """
+
+    nodes: np.ndarray
+    elements: np.ndarray
+    directors: np.ndarray
+    node_sets: Mapping[str, np.ndarray] = field(default_factory=dict)
+    edge_sets: Mapping[str, np.ndarray] = field(default_factory=dict)
+    allow_coincident_nodes: bool = False
+
+    def __post_init__(self) -> None:
+        nodes = _as_array(self.nodes, float, "nodes")
+        elements = _as_array(self.elements, int, "elements")
+        directors = _as_array(self.directors, float, "directors")
+        if nodes.ndim != 2 or nodes.shape[1] != 3:
+            raise MeshError(f"nodes must have shape (n, 3), got {nodes.shape}")
+        if elements.ndim != 2 or elements.shape[1] != 6:
+            raise MeshError(f"elements must have shape (m, 6) (six-node triangles), got {elements.shape}")
+        if directors.shape != nodes.shape:
+            raise MeshError(f"directors must have the shape of nodes {nodes.shape}, got {directors.shape}")
+        node_sets = {str(k): _as_array(v, int, f"node set {k!r}").ravel() for k, v in self.node_sets.items()}
+        edge_sets = {str(k): _as_array(v, int, f"edge set {k!r}").reshape(-1, 3) for k, v in self.edge_sets.items()}
+        for arr in (nodes, elements, directors, *node_sets.values(), *edge_sets.values()):
+            arr.flags.writeable = False
+        object.__setattr__(self, "nodes", nodes)
+        object.__setattr__(self, "elements", elements)
+        object.__setattr__(self, "directors", directors)
+        object.__setattr__(self, "node_sets", node_sets)
+        object.__setattr__(self, "edge_sets", edge_sets)
+        validate(self)
+
+    # -- sizes ------------------------------------------------------------------------------------------
+    @property
+    def n_nodes(self) -> int:
+        return len(self.nodes)
+
+    @property
+    def n_elements(self) -> int:
+        return len(self.elements)
+
+    # -- sets -------------------------------------------------------------------------------------------
+    def node_set(self, name: str) -> np.ndarray:
+        """The node indices of a named node set (an edge set's nodes count as a node set too)."""
+        if name in self.node_sets:
+            return self.node_sets[name]
+        if name in self.edge_sets:
+            return np.unique(self.edge_sets[name])
+        raise MeshError(f"unknown node set {name!r}; this mesh has {_names(self.node_sets, self.edge_sets)}")
+
+    def edge_set(self, name: str) -> np.ndarray:
+        """The (k, 3) edge triples of a named edge set."""
+        if name not in self.edge_sets:
+            known = ", ".join(sorted(self.edge_sets)) or "none"
+            raise MeshError(f"unknown edge set {name!r}; this mesh has edge sets: {known}")
+        return self.edge_sets[name]
+
+    def nearest_node(self, point) -> int:
+        """Index of the node nearest to ``point`` (3,)."""
+        p = np.asarray(point, dtype=float)
+        if p.shape != (3,) or not np.all(np.isfinite(p)):
+            raise MeshError(f"point must be a finite 3-vector, got {point!r}")
+        return int(np.argmin(np.linalg.norm(self.nodes - p, axis=1)))
+
+    def with_sets(self, node_sets: Mapping[str, np.ndarray] | None = None,
+                  edge_sets: Mapping[str, np.ndarray] | None = None) -> "Tri6Mesh":
+        """A copy with more named sets (existing names are replaced)."""
+        return Tri6Mesh(self.nodes, self.elements, self.directors, {**self.node_sets, **(node_sets or {})},
+                        {**self.edge_sets, **(edge_sets or {})}, self.allow_coincident_nodes)
+
+    # -- topology ---------------------------------------------------------------------------------------
+    def boundary_edges(self) -> np.ndarray:
+        """All boundary edges (k, 3) as (corner, midside, corner), oriented as in their element."""
+        triples = self.elements[:, ELEMENT_EDGES].reshape(-1, 3)
+        keys = np.sort(triples[:, [0, 2]], axis=1)
+        _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+        return triples[counts[inverse.ravel()] == 1]
+
+    def element_normals(self) -> np.ndarray:
+        """Unit normals (m, 3) of the elements at their centroid, x_,r x x_,s."""
+        dN = shape_derivatives(1 / 3, 1 / 3)
+        X = self.nodes[self.elements]                       # (m, 6, 3)
+        g = np.einsum("ai,mij->maj", dN, X)
+        n = np.cross(g[:, 0], g[:, 1])
+        return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+    def area(self) -> float:
+        """The reference surface area (7-point rule)."""
+        pts, wts = gauss_triangle_7()
+        X = self.nodes[self.elements]
+        total = 0.0
+        for (r, s), w in zip(pts, wts):
+            g = np.einsum("ai,mij->maj", shape_derivatives(r, s), X)
+            total += w * np.linalg.norm(np.cross(g[:, 0], g[:, 1]), axis=1).sum()
+        return float(total)
+
+
+def _as_array(value, dtype, name: str) -> np.ndarray:
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"{name} must be numeric: {exc}") from None
+    if dtype is int:
+        if arr.size and not np.all(np.isfinite(arr)):
+            bad = np.argwhere(~np.isfinite(arr))[0].tolist()
+            raise MeshError(f"{name} has a non-finite entry at {bad}")
+        if arr.size and np.any(arr != np.round(arr)):
+            raise MeshError(f"{name} must hold integer indices")
+        return arr.astype(np.int64)
+    return arr
+
+
+def _names(node_sets, edge_sets) -> str:
+    names = sorted(node_sets) + [f"{k} (edges)" for k in sorted(edge_sets)]
+    return "node sets: " + (", ".join(names) or "none")
+
+
+def validate(mesh: Tri6Mesh) -> None:
+    """Check a mesh; raise :class:`MeshError` naming the first bad element, node or set.
+
+    Checks: finite coordinates and directors; unit directors; indices in range; six distinct nodes per
+    element; no unused nodes; no coincident nodes (unless allowed); a positive Jacobian
+    (x_,r x x_,s) . director > 0 at the corners, midside and Gauss points of every element (this catches
+    zero-area, inverted and wrongly oriented elements and midside nodes that fold the element); midside nodes
+    close to the middle of their edge; no edge shared by more than two elements (non-manifold); consistent
+    orientation of neighbours; set indices in range and edge triples that are element edges.
+    """
+    x, conn, d = mesh.nodes, mesh.elements, mesh.directors
+    n, m = len(x), len(conn)
+    if n == 0 or m == 0:
+        raise MeshError(f"a mesh needs nodes and elements, got {n} nodes and {m} elements")
+    for arr, what in ((x, "coordinates"), (d, "director")):
+        bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1))
+        if bad.size:
+            raise MeshError(f"node {bad[0]} has a non-finite {what}: {arr[bad[0]].tolist()}")
+    norms = np.linalg.norm(d, axis=1)
+    bad = np.flatnonzero(np.abs(norms - 1.0) > 1e-8)
+    if bad.size:
+        raise MeshError(f"the director of node {bad[0]} is not a unit vector (length {norms[bad[0]]:.6g})")
+    out = np.argwhere((conn < 0) | (conn >= n))
+    if out.size:
+        e, k = out[0]
+        raise MeshError(f"element {e} refers to node {conn[e, k]}, which does not exist (mesh has {n} nodes)")
+    srt = np.sort(conn, axis=1)
+    rep = np.flatnonzero(np.any(srt[:, 1:] == srt[:, :-1], axis=1))
+    if rep.size:
+        raise MeshError(f"element {rep[0]} uses a node twice: {conn[rep[0]].tolist()}")
+    unused = np.setdiff1d(np.arange(n), conn.ravel())
+    if unused.size:
+        raise MeshError(f"node {unused[0]} belongs to no element ({unused.size} unused node(s))")
+    if not mesh.allow_coincident_nodes:
+        _check_coincident(x)
+    _check_jacobians(x, conn, d)
+    _check_midside(x, conn)
+    _check_topology(conn)
+    _check_sets(mesh)
+
+
+def _check_coincident(x: np.ndarray) -> None:
+    from scipy.spatial import cKDTree
+
+    tol = 1e-10 * max(float(np.ptp(x, axis=0).max()), 1e-300)
+    pairs = cKDTree(x).query_pairs(tol, output_type="ndarray")
+    if len(pairs):
+        a, b = sorted(int(i) for i in pairs[np.lexsort(pairs.T[::-1])[0]])
+        raise MeshError(f"nodes {a} and {b} coincide at {x[a].tolist()} (duplicate nodes; merge them, or "
+                        "pass allow_coincident_nodes=True for a deliberate slit)")
+
+
+def _check_jacobians(x: np.ndarray, conn: np.ndarray, d: np.ndarray) -> None:
+    X = x[conn]                                            # (m, 6, 3)
+    D = d[conn]
+    size = np.linalg.norm(X[:, 1] - X[:, 0], axis=1) + np.linalg.norm(X[:, 2] - X[:, 0], axis=1)
+    for p, dN in zip(_CHECK_POINTS, _CHECK_DN):
+        g = np.einsum("ai,mij->maj", dN, X)
+        normal = np.cross(g[:, 0], g[:, 1])
+        director = np.einsum("i,mij->mj", shape_functions(*p), D)
+        jac = np.einsum("mj,mj->m", normal, director)
+        bad = np.flatnonzero(jac <= 1e-10 * size**2)
+        if bad.size:
+            e = int(bad[0])
+            area = 0.5 * np.linalg.norm(np.cross(X[e, 1] - X[e, 0], X[e, 2] - X[e, 0]))
+            if area <= 1e-12 * size[e] ** 2:
+                raise MeshError(f"element {e} has zero area (corners {conn[e, :3].tolist()} are collinear)")
+            raise MeshError(f"element {e} is inverted or oriented against the directors at (r, s) = "
+                            f"({p[0]:.3g}, {p[1]:.3g}): Jacobian . director = {jac[e]:.3g}; list its corners "
+                            "counter-clockwise seen from the director and keep midside nodes near their edges")
+
+
+def _check_midside(x: np.ndarray, conn: np.ndarray) -> None:
+    for k, (a, mid, b) in enumerate(ELEMENT_EDGES):
+        chord = x[conn[:, b]] - x[conn[:, a]]
+        off = x[conn[:, mid]] - 0.5 * (x[conn[:, a]] + x[conn[:, b]])
+        ratio = np.linalg.norm(off, axis=1) / np.linalg.norm(chord, axis=1)
+        bad = np.flatnonzero(ratio > MIDSIDE_TOLERANCE)
+        if bad.size:
+            e = int(bad[0])
+            raise MeshError(f"midside node {conn[e, mid]} of element {e} lies {ratio[e]:.3g} edge lengths from "
+                            f"the middle of edge ({conn[e, a]}, {conn[e, b]}) (at most {MIDSIDE_TOLERANCE})")
+
+
+def _check_topology(conn: np.ndarray) -> None:
+    triples = conn[:, ELEMENT_EDGES].reshape(-1, 3)
+    keys = np.sort(triples[:, [0, 2]], axis=1)
+    uniq, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    many = np.flatnonzero(counts > 2)
+    if many.size:
+        owners = sorted(set((np.flatnonzero(inverse == many[0]) // 3).tolist()))
+        raise MeshError(f"edge {uniq[many[0]].tolist()} is shared by {counts[many[0]]} elements {owners} "
+                        "(non-manifold)")
+    for k in np.flatnonzero(counts == 2):
+        i, j = np.flatnonzero(inverse == k)
+        if triples[i, 1] != triples[j, 1]:
+            raise MeshError(f"elements {i // 3} and {j // 3} share the edge {uniq[k].tolist()} but not its "
+                            f"midside node ({triples[i, 1]} vs {triples[j, 1]})")
+        if triples[i, 0] == triples[j, 0]:
+            raise MeshError(f"elements {i // 3} and {j // 3} have opposite orientations (they run along their "
+                            f"common edge {uniq[k].tolist()} in the same direction)")
+
+
+def _check_sets(mesh: Tri6Mesh) -> None:
+    n = mesh.n_nodes
+    for name, idx in mesh.node_sets.items():
+        bad = idx[(idx < 0) | (idx >= n)]
+        if bad.size:
+            raise MeshError(f"node set {name!r} refers to node {bad[0]}, which does not exist")
+    if not mesh.edge_sets:
+        return
+    triples = mesh.elements[:, ELEMENT_EDGES].reshape(-1, 3)
+    known = {tuple(t) for t in triples} | {tuple(t[::-1]) for t in triples}
+    for name, edges in mesh.edge_sets.items():
+        for edge in edges:
+            if tuple(edge) not in known:
+                raise MeshError(f"edge set {name!r} has {edge.tolist()}, which is not an element edge "
+                                "(corner, midside, corner)")

@@ -1,0 +1,200 @@
+"""Rerun recording (.rrd) of a run, for the rerun viewer (``rerun run.rrd``); needs ``rerun-sdk`` (>= 0.41).
+
+The rerun SDK is imported only when a :class:`RerunLogger` is created, never by importing this module.
+The recording is written to a file only: no viewer is spawned, nothing goes over the network.
+
+Timelines
+    ``step``         sequence: the solver's step number
+    ``load_factor``  (kind "static") duration timeline whose value *in seconds* is the load factor (rerun has
+                     no floating-point timelines; the viewer shows e.g. 0.35 as "0.350s"; resolution 1e-9).
+                     On a snap-back path (arc length) it is not monotonic: use ``step`` to replay in order.
+    ``time``         (kind "dynamic") duration timeline: the simulated time in seconds.
+    (rerun also adds its own ``log_time``, the wall-clock time of logging.)
+
+Entity paths
+    ``body/mesh``            Mesh3D. Static: ``triangle_indices`` (each six-node triangle is drawn as four
+                             linear triangles: c0-m01-m20, m01-c1-m12, m20-m12-c2, m01-m12-m20, wound so that
+                             their front faces are on the side of the reference directors). Per step:
+                             ``vertex_positions`` (the nodal positions x, one vertex per node),
+                             ``vertex_normals`` (the current directors) and ``vertex_colors`` (colour map of
+                             the displacement magnitude |x - X0|, unless ``color_by=None``).
+    ``body/directors``       Arrows3D, per step, if ``directors=True``: the directors at the nodes, drawn with
+                             half the mean element edge length.
+    ``outputs/<name>``       Scalars, per step: the tracked outputs.
+    ``reference/<name>``     Scalars on the ``load_factor`` (or ``time``) timeline only, at the reference's own
+                             load factors (styled as points), logged once at creation.
+    ``stats/max_displacement``  Scalars, per step: the largest |x - X0| (the top of the colour scale when the
+                             scale is automatic).
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+# viridis at 0, 1/4, 1/2, 3/4, 1 (sRGB)
+_VIRIDIS = np.array([[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]], dtype=float)
+COLOR_BY = ("displacement", None)
+UNIFORM_COLOR = (180, 180, 190)
+TIMELINES = {"static": "load_factor", "dynamic": "time"}
+
+
+def colormap(values: np.ndarray, vmin: float, vmax: float) -> np.ndarray:
+    """RGB colours (n, 3) uint8 of ``values`` mapped linearly from [vmin, vmax] through a 5-point viridis."""
+    values = np.asarray(values, dtype=float)
+    span = vmax - vmin
+    t = np.zeros_like(values) if not span > 0 else np.clip((values - vmin) / span, 0.0, 1.0)
+    t = np.nan_to_num(t, nan=0.0)
+    s = t * (len(_VIRIDIS) - 1)
+    i = np.minimum(s.astype(int), len(_VIRIDIS) - 2)
+    w = (s - i)[..., None]
+    rgb = (1.0 - w) * _VIRIDIS[i] + w * _VIRIDIS[i + 1]
+    return np.rint(rgb).astype(np.uint8)
+
+
+def display_triangles(elements: np.ndarray) -> np.ndarray:
+    """The four linear display triangles (4m, 3) of six-node triangles (m, 6) (corners, then midsides
+    (0,1), (1,2), (2,0)), in the winding of the six-node triangle."""
+    e = np.asarray(elements)
+    c0, c1, c2, m01, m12, m20 = (e[:, j] for j in range(6))
+    tri = np.stack([np.stack([c0, m01, m20], -1), np.stack([m01, c1, m12], -1),
+                    np.stack([m20, m12, c2], -1), np.stack([m01, m12, m20], -1)], axis=1)
+    return tri.reshape(-1, 3)
+
+
+def _orient(tri: np.ndarray, nodes: np.ndarray, directors: np.ndarray) -> np.ndarray:
+    """Flip the display triangles whose winding normal points away from the mean director of their nodes."""
+    p = nodes[tri]
+    normal = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    flip = np.einsum("ij,ij->i", normal, directors[tri].sum(axis=1)) < 0
+    tri = tri.copy()
+    tri[flip] = tri[flip][:, ::-1]
+    return tri
+
+
+class RerunLogger:
+    """Log a run to a rerun recording file (layout in the module docstring).
+
+    Parameters
+    ----------
+    path : the .rrd file to write (overwritten)
+    mesh : anything with ``.nodes`` (n, 3), ``.elements`` (m, 6) and ``.directors`` (n, 3)
+    scene_name : the recording's name
+    color_by : "displacement" (|x - X0| through a viridis colour map) or None (uniform colour)
+    directors : also log the directors as arrows
+    reference : reference curves {name: (load_factors, values)} (or times, for kind "dynamic")
+    kind : "static" (``load_factor`` timeline) or "dynamic" (``time`` timeline)
+    color_range : (vmin, vmax) of the colour scale; None scales every step to [0, its max displacement]
+    """
+
+    def __init__(self, path, mesh, scene_name: str, color_by: str | None = "displacement",
+                 directors: bool = False, reference: dict | None = None, *, kind: str = "static",
+                 color_range: tuple[float, float] | None = None):
+        if color_by not in COLOR_BY:
+            raise ValueError(f"color_by must be one of {COLOR_BY}, got {color_by!r}")
+        if kind not in TIMELINES:
+            raise ValueError(f"kind must be 'static' or 'dynamic', got {kind!r}")
+        try:
+            import rerun as rr
+        except ImportError as exc:
+            raise ImportError("rerun output needs the rerun SDK: pip install 'flexbody[rerun]' "
+                              f"(or rerun-sdk) ({exc})") from None
+        self._rr = rr
+        self.path = os.fspath(path)
+        self.kind = kind
+        self.timeline = TIMELINES[kind]
+        self.color_by = color_by
+        self.directors = bool(directors)
+        self.color_range = None if color_range is None else (float(color_range[0]), float(color_range[1]))
+        self.nodes = np.asarray(mesh.nodes, dtype=float)
+        elements = np.asarray(mesh.elements)
+        ref_directors = np.asarray(mesh.directors, dtype=float)
+        if self.nodes.ndim != 2 or self.nodes.shape[1] != 3:
+            raise ValueError(f"mesh.nodes must have shape (n, 3), got {self.nodes.shape}")
+        if elements.ndim != 2 or elements.shape[1] != 6:
+            raise ValueError(f"mesh.elements must have shape (m, 6), got {elements.shape}")
+        if ref_directors.shape != self.nodes.shape:
+            raise ValueError(f"mesh.directors must have shape {self.nodes.shape}, got {ref_directors.shape}")
+        self.triangles = _orient(display_triangles(elements), self.nodes, ref_directors).astype(np.uint32)
+        corners = self.nodes[elements[:, :3]]
+        edges = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=-1)
+        self.arrow_length = 0.5 * float(edges.mean()) if edges.size else 1.0
+
+        curves = {}
+        for name, curve in (reference or {}).items():
+            try:
+                params, values = curve
+            except (TypeError, ValueError):
+                raise ValueError(f"reference {name!r} must be a pair (load_factors, values)") from None
+            params = np.asarray(params, dtype=float).ravel()
+            values = np.asarray(values, dtype=float).ravel()
+            if params.shape != values.shape:
+                raise ValueError(f"reference {name!r}: {params.size} load factors but {values.size} values")
+            curves[str(name)] = (params, values)
+
+        parent = os.path.dirname(os.path.abspath(self.path))
+        if not os.path.isdir(parent):
+            raise FileNotFoundError(f"cannot create rerun recording {self.path!r}: directory {parent!r} does not exist")
+        self._rec = rr.RecordingStream("flexbody")
+        try:
+            self._rec.save(self.path)
+        except (RuntimeError, OSError) as exc:
+            self._rec.disconnect()
+            raise OSError(f"cannot create rerun recording {self.path!r}: {exc}") from None
+        self._closed = False
+        try:
+            self._log_static(scene_name, curves)
+        except BaseException:
+            self.close()
+            raise
+
+    def _log_static(self, scene_name: str, curves: dict) -> None:
+        rr, rec = self._rr, self._rec
+        rec.send_recording_name(str(scene_name))
+        # topology once, static; the positions are per step (static positions would shadow them)
+        rec.log("body/mesh", rr.Mesh3D.from_fields(triangle_indices=self.triangles), static=True)
+        for name, (params, values) in curves.items():
+            entity = f"reference/{rr.escape_entity_path_part(name)}"
+            rec.log(entity, rr.SeriesPoints(names=f"{name} (reference)"), static=True)
+            rec.send_columns(entity, indexes=[rr.TimeColumn(self.timeline, duration=params)],
+                             columns=rr.Scalars.columns(scalars=values))
+
+    # -- context manager --------------------------------------------------------------------------------------
+    def __enter__(self) -> "RerunLogger":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def log_step(self, step: int, load_factor_or_time: float, state, tracked: dict[str, float] | None = None) -> None:
+        """Log one step: ``state`` has ``.x`` (n, 3) and ``.frames`` (n, 3, 3); ``tracked`` {name: value}."""
+        if self._closed:
+            raise ValueError(f"rerun recording {self.path!r} is closed")
+        rr, rec = self._rr, self._rec
+        x = np.asarray(state.x, dtype=float)
+        if x.shape != self.nodes.shape:
+            raise ValueError(f"state.x must have shape {self.nodes.shape}, got {x.shape}")
+        d = np.asarray(state.frames, dtype=float)[:, :, 2]
+        rec.set_time("step", sequence=int(step))
+        rec.set_time(self.timeline, duration=float(load_factor_or_time))
+        u = np.linalg.norm(x - self.nodes, axis=1)
+        umax = float(u.max()) if u.size else 0.0
+        if self.color_by is None:
+            colors = np.broadcast_to(np.array(UNIFORM_COLOR, np.uint8), x.shape)
+        else:
+            vmin, vmax = self.color_range if self.color_range is not None else (0.0, umax)
+            colors = colormap(u, vmin, vmax)
+        rec.log("body/mesh", rr.Mesh3D.from_fields(vertex_positions=x, vertex_normals=d, vertex_colors=colors))
+        if self.directors:
+            rec.log("body/directors", rr.Arrows3D(origins=x, vectors=self.arrow_length * d))
+        rec.log("stats/max_displacement", rr.Scalars(umax))
+        for name, value in (tracked or {}).items():
+            rec.log(f"outputs/{rr.escape_entity_path_part(str(name))}", rr.Scalars(float(value)))
+
+    def close(self) -> None:
+        """Flush everything to the file and close it (idempotent)."""
+        if not self._closed:
+            self._closed = True
+            self._rec.flush()
+            self._rec.disconnect()
