@@ -18,7 +18,7 @@ STUDIES = {
     "cantilever_end_moment": [dict(nx=16, ny=1, thickness=0.01), dict(nx=16, ny=1, thickness=0.1),
                               dict(nx=32, ny=2, thickness=0.01)],
     "cantilever_end_shear": [dict(nx=16, ny=1), dict(nx=32, ny=2)],
-    "slit_annular_plate": [dict(n_radial=10, n_circ=30), dict(n_radial=16, n_circ=48)],
+    "slit_annular_plate": [dict(n_radial=10, n_circ=30), dict(n_radial=10, n_circ=60), dict(n_radial=16, n_circ=48)],
     "pullout_cylinder": [dict(n_circ=12, n_axial=8), dict(n_circ=24, n_axial=16)],
     "hemisphere": [dict(n_meridian=20, n_circ=20), dict(n_meridian=32, n_circ=32)],
 }

@@ -23,6 +23,7 @@ from flexbody.body import ShellBody, ShellState, update_state
 from flexbody.constraints import Fix, Symmetry, basis_with_first
 from flexbody.frames import align_frame
 from flexbody.loads import FollowerPressure, NodalLoad, pressure_contribution
+from flexbody.scatter import scatter_blocks
 
 _COMPONENT = {"x": 0, "y": 1, "z": 2}
 
@@ -100,11 +101,6 @@ class Model:
         self._slot_elem = slot(er, ec).reshape(m, 36, 36)
         self._slot_node = slot(nr, nc).reshape(n, 6, 6)
 
-    def _scatter(self, slots: np.ndarray, values: np.ndarray, out: np.ndarray) -> None:
-        slots, values = slots.ravel(), values.ravel()
-        mask = slots >= 0
-        out += np.bincount(slots[mask], weights=values[mask], minlength=out.size)
-
     def _check_nodes(self, nodes: np.ndarray, what: str) -> None:
         n = self.body.n_nodes
         if nodes.size == 0:
@@ -165,8 +161,18 @@ class Model:
                 target = self.follower if load.follower else self.dead
                 np.add.at(target, load.nodes, np.concatenate([load.force, load.moment]))
             elif isinstance(load, FollowerPressure):
-                if not np.isfinite(load.pressure):
+                try:
+                    p = float(load.pressure)
+                except (TypeError, ValueError):
+                    raise ModelError(f"pressure must be a number, got {load.pressure!r}") from None
+                if not np.isfinite(p):
                     raise ModelError(f"pressure must be finite, got {load.pressure!r}")
+                if load.elements is not None:
+                    elems = np.atleast_1d(np.asarray(load.elements))
+                    m = self.body.mesh.n_elements
+                    if elems.size == 0 or not np.issubdtype(elems.dtype, np.integer) or elems.min() < 0 \
+                            or elems.max() >= m:
+                        raise ModelError(f"pressure elements must be indices in 0..{m - 1}, got {load.elements!r}")
                 self.pressures.append(load)
             else:
                 raise ModelError(f"unknown load type {type(load).__name__}")
@@ -242,12 +248,23 @@ class Model:
 
     def _residual6(self, state: ShellState, lam: float, want_tangent: bool):
         self._check_finite(state)
+        if not np.isfinite(lam):
+            raise FloatingPointError(f"non-finite load factor {lam!r}")
         fe, Ke = self.body.element_forces(state, want_tangent)
         self.counters.residuals += 1
+        bad = np.flatnonzero(~np.all(np.isfinite(fe), axis=1))
+        if bad.size == 0 and want_tangent:
+            bad = np.flatnonzero(~np.all(np.isfinite(Ke.reshape(len(Ke), -1)), axis=1))
+        if bad.size:
+            raise FloatingPointError(f"element {bad[0]} gives non-finite internal forces or tangent "
+                                     f"({bad.size} element(s)); nodes {self.body.mesh.elements[bad[0]].tolist()}")
         n = self.body.n_nodes
         r6 = np.zeros(6 * n)
         np.add.at(r6, self._dof6, fe)
         fext, ext_blocks, press = self._external_local(state)
+        bad = np.flatnonzero(~np.all(np.isfinite(fext), axis=1))
+        if bad.size:
+            raise FloatingPointError(f"non-finite external load at node {bad[0]}: {fext[bad[0]].tolist()}")
         r6 = r6.reshape(n, 6) - lam * fext
         return r6, Ke, ext_blocks, press
 
@@ -267,30 +284,25 @@ class Model:
         idx = np.flatnonzero(self.has_basis)
         C[idx] = np.transpose(S[idx], (0, 2, 1))
         data = np.zeros(self._indices.size)
-        self._scatter(self._slot_elem, self._transform_blocks(Ke.reshape(-1, 6, 6, 6, 6), S[conn], C[conn]), data)
+        scatter_blocks(Ke, S[conn], C[conn], self._slot_elem, 1.0, data)
         nodal = -lam * ext_blocks
         nodal[:, :3, 3:] -= hat_many(r6[:, :3])                     # the turning frame: -hat(r_u,I)
-        nodal = self._transform_blocks(nodal[:, None, :, None, :], S[:, None], C[:, None])
-        self._scatter(self._slot_node, nodal, data)
+        scatter_blocks(nodal, S[:, None], C[:, None], self._slot_node, 1.0, data)
         for elems, conn_p, local in press:
             blocks = np.zeros((len(elems), 6, 6, 6, 6))
-            blocks[:, :, :3, :, :3] = -lam * local.transpose(0, 1, 3, 2, 4)
-            self._scatter(self._slot_elem[elems], self._transform_blocks(blocks, S[conn_p], C[conn_p]), data)
+            blocks[:, :, :3, :, :3] = local.transpose(0, 1, 3, 2, 4)
+            scatter_blocks(blocks.reshape(len(elems), 36, 36), S[conn_p], C[conn_p], self._slot_elem[elems],
+                           -lam, data)
         K = sp.csr_matrix((data, self._indices, self._indptr), shape=(self.n_dof, self.n_dof))
         r = self._rotate_rows(state, r6).ravel()[self.free]
         return r, K.tocsc()
 
-    @staticmethod
-    def _transform_blocks(K: np.ndarray, S: np.ndarray, C: np.ndarray) -> np.ndarray:
-        """Blocks K[e, a, i, b, j] (node a comp i, node b comp j) with rows S_a and columns C_b on translations."""
-        K = K.copy()
-        K[:, :, :3] = np.einsum("eaik,eakbj->eaibj", S, K[:, :, :3])
-        K[:, :, :, :, :3] = np.einsum("eaibk,ebkj->eaibj", K[:, :, :, :, :3], C)
-        return K.reshape(len(K), -1)
-
     def external_force(self, state: ShellState) -> np.ndarray:
         """f_ext(q) on the free DoFs (the residual is f_int - lambda f_ext)."""
         fext = self._external_local(state)[0]
+        bad = np.flatnonzero(~np.all(np.isfinite(fext), axis=1))
+        if bad.size:
+            raise FloatingPointError(f"non-finite external load at node {bad[0]}: {fext[bad[0]].tolist()}")
         return self._rotate_rows(state, fext).ravel()[self.free]
 
     def conjugate(self, state: ShellState, dq: np.ndarray) -> np.ndarray:
@@ -317,4 +329,62 @@ class Model:
     @staticmethod
     def _check_finite(state: ShellState) -> None:
         if not (np.all(np.isfinite(state.x)) and np.all(np.isfinite(state.frames))):
-            raise FloatingPointError("non-finite nodal positions or frames in the state")
+            bad = np.flatnonzero(~(np.all(np.isfinite(state.x), axis=1)
+                                   & np.all(np.isfinite(state.frames.reshape(len(state.x), -1)), axis=1)))
+            raise FloatingPointError(f"non-finite nodal positions or frames in the state (node {bad[0]}, "
+                                     f"{bad.size} node(s))")
+
+    # -- support ------------------------------------------------------------------------------------------
+    def unrestrained_rigid_modes(self) -> list[str]:
+        """The rigid-body motions the constraints leave free, described in words (empty: fully supported).
+
+        A rigid motion is a translation t and a rotation w about the model centre c: delta x_I = t + w x
+        (x_I - c), and the in-plane nodal rotations are the components of w along t1_I, t2_I. It is free
+        when every constrained component of every node vanishes for it; the free motions are the null space
+        of the constrained components as linear functions of (t, w). Without drilling DoFs a rotation of the
+        body about a nodal director is not a nodal rotation DoF, so it is restrained only by translations.
+        """
+        x = self.body.mesh.nodes
+        frames = self.body.frames0
+        c = x.mean(axis=0)
+        size = float(np.ptp(x, axis=0).max()) or 1.0
+        rows = []
+        for i in np.flatnonzero(self.fixed[:, :5].any(axis=1)):
+            p = (x[i] - c) / size
+            trans = np.hstack([np.eye(3), -hat_many(p[None])[0]])      # delta x / size per unit (t, w)
+            if self.fixed[i, :3].all():
+                rows.append(trans)
+            elif self.fixed[i, :3].any():
+                E = self.basis[i] if self.has_basis[i] else frames[i]
+                rows.append(E[:, self.fixed[i, :3]].T @ trans)
+            for k in (0, 1):
+                if self.fixed[i, 3 + k]:
+                    rows.append(np.hstack([np.zeros(3), frames[i][:, k]])[None])
+        A = np.vstack(rows) if rows else np.zeros((0, 6))
+        if A.shape[0]:
+            _, sv, vt = np.linalg.svd(A, full_matrices=True)
+            rank = int(np.sum(sv > 1e-8 * sv.max()))
+        else:
+            vt, rank = np.eye(6), 0
+        free = 6 - rank
+        if free == 0:
+            return []
+        modes = [f"translation along {a}" for k, a in enumerate("xyz")
+                 if A.shape[0] == 0 or np.linalg.norm(A[:, k]) <= 1e-8 * np.abs(A).max()]
+        rotations = free - len(modes)
+        if rotations:
+            _, sw, wt = np.linalg.svd(vt[rank:, 3:])           # the rotation parts of the free motions
+            axes = [(np.round(a * np.sign(a[np.argmax(np.abs(a) > 1e-3)]), 3) + 0.0).tolist()
+                    for a in wt[:rotations]]
+            modes.append(f"{rotations} rotation(s) (axes along {axes})")
+        return modes
+
+    def check_static_support(self) -> None:
+        """Raise ModelError if the constraints leave a rigid-body motion free: the stiffness is then singular
+        and no static equilibrium can be computed."""
+        modes = self.unrestrained_rigid_modes()
+        if modes:
+            what = "no constraints" if not self.constraints else "constraints that leave it free to move"
+            raise ModelError(f"the body has {what}: rigid-body motions are not restrained "
+                             f"({'; '.join(modes)}), so the static stiffness is singular; add supports "
+                             "(Fix / Symmetry) that stop every rigid-body motion")

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexbody.frames import frames_from_directors
-from flexbody.lie import so3
+from flexbody.lie import kernels
 from flexbody.mesh import Tri6Mesh
 from flexbody.shell.element_reference import assumed_strain_maps
 from flexbody.shell.geometry import N_GAUSS, element_geometry
@@ -149,8 +149,8 @@ def update_state(state: ShellState, du: np.ndarray, dtheta: np.ndarray,
     if global_translation is not None:
         dx[global_translation] = du[global_translation]
     new.x += dx
-    rot = np.zeros((len(du), 3))
-    rot[:, :2] = dtheta
-    for i in np.flatnonzero(np.any(dtheta != 0.0, axis=1)):
-        new.frames[i] = state.frames[i] @ so3.exp(rot[i])
+    dtheta = np.ascontiguousarray(dtheta, dtype=float)
+    if dtheta.shape != (len(du), 2):
+        raise ValueError(f"dtheta must have shape ({len(du)}, 2), got {dtheta.shape}")
+    kernels.update_frames_into(np.ascontiguousarray(state.frames), dtheta, new.frames)
     return new

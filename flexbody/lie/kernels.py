@@ -340,3 +340,10 @@ def se3_tangent_inv_into(h, out):
         for j in range(3):
             out[3 + i, 3 + j] = out[i, j]
             out[3 + i, j] = 0.0
+
+
+@jit
+def update_frames_into(frames, dtheta, out):
+    """out[i] = frames[i] exp(dtheta[i, 0] e1 + dtheta[i, 1] e2) for every node (the 5-DoF update, batched)."""
+    for i in range(frames.shape[0]):
+        update_frame_into(frames[i], dtheta[i, 0], dtheta[i, 1], out[i])

@@ -187,3 +187,15 @@ def test_kernels_do_not_allocate(nrt_stats):
     # the count is able to fail: a loop that allocates is seen
     _allocates(1, np.empty((3, 3)))
     assert _allocations(_allocates, 200, np.empty((3, 3))) - _allocations(_allocates, 1, np.empty((3, 3))) >= 199
+
+
+def test_batched_frame_update_matches_the_reference():
+    from flexbody.lie.kernels import update_frames_into
+
+    rng = np.random.default_rng(11)
+    frames = np.array([so3.exp(v) for v in rng.normal(size=(7, 3))])
+    dtheta = rng.normal(size=(7, 2)) * np.array([[1.0], [1e-9], [3.0], [0.0], [1.0], [2.9], [1e-4]])
+    out = np.empty_like(frames)
+    update_frames_into(frames, dtheta, out)
+    for F, th, G in zip(frames, dtheta, out):
+        np.testing.assert_allclose(G, F @ so3.exp(np.array([th[0], th[1], 0.0])), rtol=0, atol=1e-14)
