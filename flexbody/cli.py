@@ -1,7 +1,13 @@
-"""The ``flexbody`` command: list and run scenes.
+"""The ``flexbody`` command: list, run, bench and compare scenes.
 
     flexbody list
-    flexbody run [SCENE] [--set KEY=VALUE ...] [--json FILE] [--quiet]
+    flexbody run [SCENE] [--set KEY=VALUE ...] [--json FILE] [--h5 FILE.h5] [--rerun FILE.rrd] [--quiet]
+    flexbody bench [SCENE ...] [--refine KEY=V1,V2,...] [--set KEY=VALUE ...] [--out DIR] [--quiet]
+    flexbody compare SCENE --with exudyn [--set KEY=VALUE ...] [--json FILE] [--quiet]
+
+SCENE is a built-in scene name (``flexbody list``) or a path to a ``.toml`` or ``.py`` scene file
+(docs/scenes.md). Bad input ends with one line on stderr naming the offending key or value (exit code 1);
+a run that stops before its last load step writes its outputs and exits with 2.
 """
 
 from __future__ import annotations
@@ -9,13 +15,36 @@ from __future__ import annotations
 import argparse
 import ast
 import json
+import math
 import sys
 import time
 
 DEFAULT_SCENE = "cantilever_end_moment"
 
+#: the default mesh sequences of ``flexbody bench`` for the built-in scenes (kept small: all five take
+#: about two minutes)
+BENCH_MESHES: dict[str, list[dict]] = {
+    "cantilever_end_moment": [dict(nx=4), dict(nx=8), dict(nx=16)],
+    "cantilever_end_shear": [dict(nx=4), dict(nx=8), dict(nx=16)],
+    "slit_annular_plate": [dict(n_radial=3, n_circ=9), dict(n_radial=5, n_circ=15)],
+    "pullout_cylinder": [dict(n_circ=6, n_axial=4), dict(n_circ=8, n_axial=6), dict(n_circ=12, n_axial=8)],
+    "hemisphere": [dict(n_meridian=8, n_circ=8), dict(n_meridian=12, n_circ=12)],
+}
+
+
+class CliError(Exception):
+    """Bad command-line input or a bad scene: printed as one line, exit code 2."""
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Arguments
+# ----------------------------------------------------------------------------------------------------------
 
 def _parse_value(text: str):
+    """A ``--set`` value: a Python/TOML-style literal (numbers, lists, true/false), else the text itself."""
+    lowered = text.lower()
+    if lowered in ("true", "false"):
+        return lowered == "true"
     try:
         return ast.literal_eval(text)
     except (ValueError, SyntaxError):
@@ -26,53 +55,96 @@ def _parse_sets(items: list[str]) -> dict:
     out = {}
     for item in items:
         if "=" not in item:
-            raise SystemExit(f"flexbody: --set expects KEY=VALUE, got {item!r}")
+            raise CliError(f"--set expects KEY=VALUE, got {item!r}")
         key, value = item.split("=", 1)
+        if not key.strip():
+            raise CliError(f"--set expects KEY=VALUE, got {item!r}")
         out[key.strip()] = _parse_value(value.strip())
     return out
 
 
-def _scene_builder(name: str):
-    """A built-in scene builder, or ``build`` from a user's Python scene file."""
-    import importlib.util
-    import os
-
-    from flexbody.scenes.builtin import BUILTIN
-    if name in BUILTIN:
-        return BUILTIN[name]
-    if name.endswith(".py"):
-        if not os.path.isfile(name):
-            raise SystemExit(f"flexbody: scene file {name!r} does not exist")
-        spec = importlib.util.spec_from_file_location("flexbody_user_scene", name)
-        module = importlib.util.module_from_spec(spec)
-        try:
-            spec.loader.exec_module(module)
-        except Exception as exc:  # a user's file: report, do not trace back into flexbody
-            raise SystemExit(f"flexbody: cannot load scene file {name!r}: {type(exc).__name__}: {exc}") from None
-        if not callable(getattr(module, "build", None)):
-            raise SystemExit(f"flexbody: scene file {name!r} must define a function build(**parameters) -> Scene")
-        return module.build
-    raise SystemExit(f"flexbody: unknown scene {name!r}; built-in scenes: {', '.join(BUILTIN)} "
-                     "(or give a path to a .py scene file)")
+def _parse_refine(items: list[str]) -> list[dict]:
+    """``--refine nx=4,8,16 --refine ny=1,2,4`` -> [{nx: 4, ny: 1}, {nx: 8, ny: 2}, {nx: 16, ny: 4}]."""
+    columns: dict[str, list] = {}
+    for item in items:
+        if "=" not in item:
+            raise CliError(f"--refine expects KEY=V1,V2,..., got {item!r}")
+        key, values = item.split("=", 1)
+        columns[key.strip()] = [_parse_value(v.strip()) for v in values.split(",") if v.strip()]
+        if not columns[key.strip()]:
+            raise CliError(f"--refine {key.strip()} has no values")
+    lengths = {len(v) for v in columns.values()}
+    if len(lengths) > 1:
+        raise CliError(f"--refine lists must have the same length, got "
+                       f"{', '.join(f'{k}: {len(v)}' for k, v in columns.items())}")
+    n = lengths.pop() if lengths else 0
+    return [{k: v[i] for k, v in columns.items()} for i in range(n)]
 
 
-def _build(name: str, params: dict):
-    import inspect
-
-    builder = _scene_builder(name)
-    allowed = [p for p in inspect.signature(builder).parameters]
-    unknown = [k for k in params if k not in allowed]
-    if unknown:
-        raise SystemExit(f"flexbody: unknown parameter(s) {unknown} for scene {name!r}; "
-                         f"documented keys: {', '.join(allowed)}")
+def _check_outputs(paths: dict[str, str | None]) -> None:
+    from flexbody.outputs.recording import OutputPathError, check_distinct, check_output_path
     try:
-        return builder(**params)
-    except (ValueError, TypeError, KeyError) as exc:
-        msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-        raise SystemExit(f"flexbody: cannot build scene {name!r}: {msg}") from None
+        for option, path in paths.items():
+            if path is not None:
+                check_output_path(path, option)
+        check_distinct(paths)
+    except OutputPathError as exc:
+        raise CliError(str(exc)) from None
 
+
+def _open(name: str):
+    from flexbody.scenes.sources import SceneError, open_scene
+    try:
+        return open_scene(name)
+    except SceneError as exc:
+        raise CliError(str(exc)) from None
+
+
+def _build(source, params: dict):
+    from flexbody.scenes.sources import SceneError
+    try:
+        return source.build(params)
+    except SceneError as exc:
+        raise CliError(str(exc)) from None
+
+
+def _write_json(path: str, data) -> None:
+    try:
+        with open(path, "w") as fh:
+            json.dump(_strict_json(data), fh, indent=2)
+    except OSError as exc:
+        raise CliError(f"cannot write --json file {path!r}: {exc.strerror or exc}") from None
+
+
+def _strict_json(value):
+    """NaN/inf as null so that every JSON reader accepts the file."""
+    if isinstance(value, dict):
+        return {k: _strict_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_strict_json(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _progress_printer(quiet: bool, prefix: str = ""):
+    """A per-step progress printer on stderr (None with --quiet)."""
+    if quiet:
+        return None
+    t0 = time.perf_counter()
+
+    def progress(rec):
+        print(f"{prefix}  step {rec.step:4d}  load factor {rec.load_factor:8.4f}  iterations {rec.iterations:2d}"
+              f"  {time.perf_counter() - t0:7.2f} s", file=sys.stderr, flush=True)
+    return progress
+
+
+# ----------------------------------------------------------------------------------------------------------
+# list
+# ----------------------------------------------------------------------------------------------------------
 
 def cmd_list(args) -> int:
+    """``flexbody list``: one line per built-in scene."""
     from flexbody.scenes.builtin import BUILTIN
     for name, builder in BUILTIN.items():
         doc = (builder.__doc__ or "").strip().splitlines()[0]
@@ -80,7 +152,12 @@ def cmd_list(args) -> int:
     return 0
 
 
+# ----------------------------------------------------------------------------------------------------------
+# run
+# ----------------------------------------------------------------------------------------------------------
+
 def summary_lines(summary) -> list[str]:
+    """The printed run summary (the same content as the --json file)."""
     d = summary.as_dict()
     lines = [
         f"scene            {d['scene']}",
@@ -101,40 +178,203 @@ def summary_lines(summary) -> list[str]:
     return lines
 
 
+def _run_failure(exc: BaseException) -> str:
+    """A one-line description of an error raised inside an analysis."""
+    text = str(exc).splitlines()[0] if str(exc) else ""
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
 def cmd_run(args) -> int:
+    """``flexbody run``: check the output paths, build the scene, run it with the requested files written
+    step by step, print the summary. Returns 0, 2 (not converged), 1 (an error inside the analysis) or 130."""
     from flexbody.scenes.scene import run_scene
     t0 = time.perf_counter()
-    scene = _build(args.scene, _parse_sets(args.set or []))
-    progress = None
-    if not args.quiet:
-        def progress(rec):
-            print(f"  step {rec.step:4d}  load factor {rec.load_factor:8.4f}  iterations {rec.iterations:2d}",
-                  file=sys.stderr, flush=True)
-    summary = run_scene(scene, progress=progress)
+    params = _parse_sets(args.set or [])
+    _check_outputs({"--json": args.json, "--h5": args.h5, "--rerun": args.rerun})
+    if args.rerun:
+        import importlib.util
+        if importlib.util.find_spec("rerun") is None:  # looked up, not imported
+            raise CliError("--rerun needs the rerun SDK: pip install 'flexbody[rerun]' (or rerun-sdk)")
+    scene = _build(_open(args.scene), params)
+    from flexbody.outputs.recording import RunRecorder
+    try:
+        recorder = RunRecorder(scene, h5=args.h5, rerun=args.rerun, directors=args.directors)
+    except (OSError, ImportError, ValueError) as exc:
+        raise CliError(str(exc).splitlines()[0]) from None
+    failure = None
+    with recorder:
+        try:
+            summary = run_scene(scene, on_step=recorder.on_step, progress=_progress_printer(args.quiet))
+        except KeyboardInterrupt:
+            failure, code = "interrupted", 130
+        except (ValueError, ArithmeticError, RuntimeError, OSError) as exc:
+            failure, code = f"the analysis failed: {_run_failure(exc)}", 1
+    if failure is not None:
+        where = (f"; {recorder.steps_written} step(s) written to {', '.join(recorder.paths)}"
+                 if recorder.paths else "")
+        print(f"flexbody: {failure}{where}", file=sys.stderr)
+        return code
     for line in summary_lines(summary):
         print(line)
     print(f"total time       {time.perf_counter() - t0:.2f} s (including setup and compilation)")
+    for path in recorder.paths:
+        print(f"written          {path}")
     if args.json:
-        try:
-            with open(args.json, "w") as fh:
-                json.dump(summary.as_dict(), fh, indent=2)
-        except OSError as exc:
-            raise SystemExit(f"flexbody: cannot write --json file {args.json!r}: {exc}") from None
+        _write_json(args.json, summary.as_dict())
+        print(f"written          {args.json}")
     return 0 if summary.result.converged else 2
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="flexbody", description=__doc__.splitlines()[0])
+# ----------------------------------------------------------------------------------------------------------
+# bench
+# ----------------------------------------------------------------------------------------------------------
+
+def _mesh_sequence(source, refine: list[dict]) -> list[dict]:
+    """The meshes a bench runs for one scene: --refine, else the built-in table, else the scene's density
+    parameters at 1x and 2x, else the scene as it is."""
+    if refine:
+        return refine
+    if source.kind == "builtin" and source.name in BENCH_MESHES:
+        return BENCH_MESHES[source.name]
+    if source.kind == "toml" and source.density:
+        return [dict(source.density), {k: 2 * v for k, v in source.density.items()}]
+    return [{}]
+
+
+def _bench_one(source, params: dict, label: str, quiet: bool):
+    from flexbody.outputs.report import BenchRun
+    from flexbody.scenes.scene import run_scene
+    from flexbody.scenes.sources import SceneError
+    try:
+        scene = source.build(params)
+    except SceneError as exc:
+        return BenchRun(source.name, label, params, failure=str(exc))
+    try:
+        model = scene.model
+        model.residual_and_tangent(model.initial_state(), 0.0)  # compile the kernels outside the timed run
+        summary = run_scene(scene, progress=_progress_printer(quiet, f"  [{label}]") if not quiet else None)
+    except (ValueError, ArithmeticError, RuntimeError) as exc:
+        return BenchRun(scene.name, label, params, failure=f"the analysis failed: {_run_failure(exc)}")
+    reference = None
+    if scene.reference is not None:
+        reference = {k: (list(map(float, scene.reference.load_factors)), list(map(float, v)))
+                     for k, v in scene.reference.values.items()}
+    return BenchRun(scene.name, label, params, summary.as_dict(), {k: list(v) for k, v in summary.history.items()},
+                    reference, reference_source=scene.reference.source if scene.reference else "")
+
+
+def _prepare_out_dir(path: str) -> None:
+    import os
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as exc:
+        raise CliError(f"cannot create --out directory {path!r}: {exc.strerror or exc}") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise CliError(f"cannot write to --out directory {path!r}")
+
+
+def cmd_bench(args) -> int:
+    """``flexbody bench``: every scene on its mesh sequence, then DIR/report.md, plots and bench.json.
+    Returns 0, or 2 if a run failed or did not converge (the report is written either way)."""
+    from flexbody.outputs.report import mesh_label, write_report
+    common = _parse_sets(args.set or [])
+    refine = _parse_refine(args.refine or [])
+    names = args.scenes or list(BENCH_MESHES)
+    sources = [_open(name) for name in names]
+    for source in sources:  # a bad scene or key stops the bench before its first long run
+        _build(source, {**common, **_mesh_sequence(source, refine)[0]})
+    _prepare_out_dir(args.out)
+    runs, failed = [], 0
+    for source in sources:
+        meshes = _mesh_sequence(source, refine)
+        if meshes == [{}]:
+            print(f"note: {source.name} runs at one mesh; give --refine KEY=V1,V2,... for a sequence",
+                  file=sys.stderr)
+        density = list(meshes[0]) or list(source.density)
+        for mesh in meshes:
+            params = {**common, **mesh}
+            label = mesh_label({**source.density, **params}, density)
+            if not args.quiet:
+                print(f"bench {source.name} [{label}]", file=sys.stderr, flush=True)
+            run = _bench_one(source, params, label, args.quiet)
+            runs.append(run)
+            failed += not run.converged
+            error = (f"max rel. error {run.max_rel_error:.2e}" if math.isfinite(run.max_rel_error)
+                     else "no reference")
+            status = run.failure or (f"{run.dofs} DoFs, {run.wall_time:.2f} s, {error}"
+                                     + ("" if run.converged else ", NOT CONVERGED"))
+            print(f"{source.name:24s} {label:28s} {status}", flush=True)
+    path = write_report(runs, args.out, " ".join(["flexbody", "bench", *args.argv]))
+    print(f"written          {path}")
+    return 0 if failed == 0 else 2
+
+
+# ----------------------------------------------------------------------------------------------------------
+# compare
+# ----------------------------------------------------------------------------------------------------------
+
+def cmd_compare(args) -> int:
+    """``flexbody compare SCENE --with exudyn``: hand over to ``flexbody.adapters.exudyn.compare_cli``."""
+    params = _parse_sets(args.set or [])
+    _check_outputs({"--json": args.json})
+    try:
+        from flexbody.adapters.exudyn import compare_cli
+    except ImportError as exc:
+        print(f"flexbody: compare --with exudyn is not available: {str(exc).splitlines()[0]} "
+              "(needs flexbody.adapters.exudyn.compare_cli and pip install 'flexbody[exudyn]')", file=sys.stderr)
+        return 2
+    return int(compare_cli(args.scene, params, args.json, args.quiet))
+
+
+# ----------------------------------------------------------------------------------------------------------
+# main
+# ----------------------------------------------------------------------------------------------------------
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="flexbody", description="List, run, bench and compare shell scenes.",
+                                     epilog="Scene files: docs/scenes.md. Output formats: docs/output_formats.md.")
     sub = parser.add_subparsers(dest="command", required=True)
     sub.add_parser("list", help="the built-in scenes").set_defaults(func=cmd_list)
+
     run = sub.add_parser("run", help="run a scene and report error against run time")
-    run.add_argument("scene", nargs="?", default=DEFAULT_SCENE, help=f"built-in scene (default {DEFAULT_SCENE})")
-    run.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a scene parameter")
+    run.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
+                     help=f"built-in scene or .toml/.py scene file (default {DEFAULT_SCENE})")
+    run.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a scene parameter (repeatable)")
     run.add_argument("--json", metavar="FILE", help="write the run summary as JSON")
+    run.add_argument("--h5", metavar="FILE.h5", help="write the mesh and every step to an HDF5 file")
+    run.add_argument("--rerun", metavar="FILE.rrd", help="write a rerun recording (needs rerun-sdk)")
+    run.add_argument("--directors", action="store_true", help="with --rerun: also log the directors")
     run.add_argument("--quiet", action="store_true", help="no progress output")
     run.set_defaults(func=cmd_run)
-    args = parser.parse_args(argv)
-    return args.func(args)
+
+    bench = sub.add_parser("bench", help="run scenes on a sequence of meshes; write report.md and plots")
+    bench.add_argument("scenes", nargs="*", help=f"scenes (default: {', '.join(BENCH_MESHES)})")
+    bench.add_argument("--refine", action="append", metavar="KEY=V1,V2,...",
+                       help="the mesh sequence, e.g. --refine nx=4,8,16 (repeat for more keys, equal lengths)")
+    bench.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a parameter in every run")
+    bench.add_argument("--out", default="bench", metavar="DIR", help="report directory (default ./bench)")
+    bench.add_argument("--quiet", action="store_true", help="no progress output")
+    bench.set_defaults(func=cmd_bench)
+
+    compare = sub.add_parser("compare", help="compare a scene with another code")
+    compare.add_argument("scene", help="built-in scene or scene file")
+    compare.add_argument("--with", dest="other", choices=["exudyn"], default="exudyn",
+                         help="the code to compare with (exudyn)")
+    compare.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a scene parameter")
+    compare.add_argument("--json", metavar="FILE", help="write the comparison as JSON")
+    compare.add_argument("--quiet", action="store_true", help="no progress output")
+    compare.set_defaults(func=cmd_compare)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = build_parser().parse_args(argv)
+    args.argv = argv[1:]
+    try:
+        return args.func(args)
+    except CliError as exc:
+        raise SystemExit(f"flexbody: {exc}") from None
 
 
 if __name__ == "__main__":

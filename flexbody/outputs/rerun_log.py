@@ -192,6 +192,11 @@ class RerunLogger:
         for name, value in (tracked or {}).items():
             rec.log(f"outputs/{rr.escape_entity_path_part(str(name))}", rr.Scalars(float(value)))
 
+    def flush(self) -> None:
+        """Write everything logged so far to the file (a run stopped later leaves it readable)."""
+        if not self._closed:
+            self._rec.flush()
+
     def close(self) -> None:
         """Flush everything to the file and close it (idempotent)."""
         if not self._closed:

@@ -1,17 +1,50 @@
-"""Reference solutions shipped with flexbody (flexbody/reference/*.csv, sources in their '#' lines)."""
+"""Reference solutions: the CSVs shipped with flexbody (flexbody/reference/*.csv, sources in their '#'
+lines) and a user's own reference CSV (the same format) for a scene file."""
 
 from __future__ import annotations
 
 from importlib import resources
+from pathlib import Path
 
 import numpy as np
+
+
+def parse_csv(text: str, source: str) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Columns and '#' comment lines of a reference CSV: comments, a header row, then numeric rows.
+
+    Raises
+    ------
+    ValueError
+        Naming ``source`` and the row, for a file without a header or data, a short row or a non-number.
+    """
+    comments = [line[1:].strip() for line in text.splitlines() if line.startswith("#")]
+    rows = [(k + 1, line) for k, line in enumerate(text.splitlines()) if line.strip() and not line.startswith("#")]
+    if len(rows) < 2:
+        raise ValueError(f"reference CSV {source!r} needs a header row and at least one data row")
+    header = [h.strip() for h in rows[0][1].split(",")]
+    data = []
+    for lineno, row in rows[1:]:
+        cells = row.split(",")
+        if len(cells) != len(header):
+            raise ValueError(f"reference CSV {source!r} line {lineno}: {len(cells)} values for "
+                             f"{len(header)} columns")
+        try:
+            data.append([float(v) for v in cells])
+        except ValueError:
+            raise ValueError(f"reference CSV {source!r} line {lineno}: not all numbers: {row.strip()!r}") from None
+    array = np.array(data)
+    return {h: array[:, k] for k, h in enumerate(header)}, comments
 
 
 def read_reference_csv(name: str) -> tuple[dict[str, np.ndarray], list[str]]:
     """Columns of a packaged reference CSV and its source comment lines."""
     text = resources.files("flexbody").joinpath("reference", name).read_text()
-    comments = [line[1:].strip() for line in text.splitlines() if line.startswith("#")]
-    rows = [line for line in text.splitlines() if line and not line.startswith("#")]
-    header = rows[0].split(",")
-    data = np.array([[float(v) for v in row.split(",")] for row in rows[1:]])
-    return {h: data[:, k] for k, h in enumerate(header)}, comments
+    return parse_csv(text, name)
+
+
+def read_csv_file(path: str | Path) -> tuple[dict[str, np.ndarray], list[str]]:
+    """Columns and comment lines of a reference CSV file (format of :func:`parse_csv`)."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"reference CSV {str(path)!r} does not exist")
+    return parse_csv(path.read_text(), str(path))

@@ -1,0 +1,222 @@
+"""The benchmark report of ``flexbody bench``: a Markdown table and PNG plots of error against run time.
+
+``write_report(runs, out_dir)`` writes
+
+- ``report.md``: per scene a table (mesh, DoFs, steps, wall time, max relative error, Newton iterations,
+  tangent updates, factorizations, converged) and the plots below;
+- ``error_vs_time.png``: max relative error against wall time, log-log, one line per scene;
+- ``load_displacement_<scene>.png``: each tracked output against the load factor for every mesh, with the
+  reference as markers;
+- ``bench.json``: the same numbers, machine-readable (every run's summary and its load-output history).
+
+Plots need matplotlib (``pip install matplotlib``, in the ``dev`` extra); it is imported only here, with the
+Agg backend (no display). Without it the report still has its tables and says the plots were skipped.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import json
+import math
+import os
+import platform
+import re
+
+import numpy as np
+
+
+@dataclass
+class BenchRun:
+    """One run of a bench: a scene at one mesh.
+
+    Attributes
+    ----------
+    scene : the scene's name
+    label : the mesh, e.g. "nx=8, ny=1"
+    parameters : the overrides it was built with
+    summary : ``RunSummary.as_dict()`` (empty if the run failed before it started)
+    history : the load factor and each tracked output per converged step
+    reference : {output: (load_factors, values)} of the scene's reference, if any
+    failure : why the run did not happen (a scene error), else None
+    reference_source : where the reference comes from
+    """
+
+    scene: str
+    label: str
+    parameters: dict
+    summary: dict = field(default_factory=dict)
+    history: dict = field(default_factory=dict)
+    reference: dict | None = None
+    failure: str | None = None
+    reference_source: str = ""
+
+    @property
+    def dofs(self) -> int:
+        return int(self.summary.get("dofs", 0))
+
+    @property
+    def wall_time(self) -> float:
+        return float(self.summary.get("wall_time_s", math.nan))
+
+    @property
+    def max_rel_error(self) -> float:
+        value = self.summary.get("max_rel_error", math.nan)
+        return math.nan if value is None else float(value)
+
+    @property
+    def converged(self) -> bool:
+        return bool(self.summary.get("converged", False)) and self.failure is None
+
+
+def mesh_label(parameters: dict, density_keys) -> str:
+    """A short mesh description from the density parameters, e.g. ``"nx=8, ny=1"``."""
+    keys = [k for k in density_keys if k in parameters] or list(parameters)
+    return ", ".join(f"{k.rsplit('.', 1)[-1]}={parameters[k]}" for k in keys) or "default"
+
+
+def _fmt(value: float, spec: str) -> str:
+    return "-" if value is None or (isinstance(value, float) and not math.isfinite(value)) else format(value, spec)
+
+
+def markdown_table(runs: list[BenchRun]) -> str:
+    """The Markdown table of the runs of one scene."""
+    lines = ["| mesh | DoFs | steps | wall time [s] | max rel. error | Newton iterations | tangent updates "
+             "| factorizations | converged |", "|---|---:|---:|---:|---:|---:|---:|---:|---|"]
+    for r in runs:
+        s = r.summary
+        if r.failure is not None:
+            lines.append(f"| {r.label} | - | - | - | - | - | - | - | failed: {r.failure} |")
+            continue
+        status = "yes" if s["converged"] else "no: " + str(s["message"]).replace("|", "/")[:80]
+        lines.append(f"| {r.label} | {s['dofs']} | {s['steps']} | {_fmt(s['wall_time_s'], '.3f')} | "
+                     f"{_fmt(r.max_rel_error, '.2e')} | {s['newton_iterations']} | {s['tangent_updates']} | "
+                     f"{s['factorizations']} | {status} |")
+    return "\n".join(lines)
+
+
+def _pyplot():
+    """matplotlib.pyplot with the Agg backend, or None if matplotlib is not installed."""
+    try:
+        import matplotlib
+    except ImportError:
+        return None
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def _safe(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name)
+
+
+def plot_error_vs_time(runs: list[BenchRun], path: str) -> bool:
+    """Max relative error against wall time (log-log), one line per scene; False if nothing to plot."""
+    plt = _pyplot()
+    by_scene: dict[str, list[BenchRun]] = {}
+    for r in runs:
+        if r.failure is None and math.isfinite(r.max_rel_error) and r.max_rel_error > 0 and r.wall_time > 0:
+            by_scene.setdefault(r.scene, []).append(r)
+    if plt is None or not by_scene:
+        return False
+    fig, ax = plt.subplots(figsize=(7, 5))
+    for scene, rs in by_scene.items():
+        rs = sorted(rs, key=lambda r: r.dofs)  # the line follows the refinement
+        line, = ax.loglog([r.wall_time for r in rs], [r.max_rel_error for r in rs], "o-", label=scene)
+        for r in rs:
+            ax.annotate(f"{r.dofs}", (r.wall_time, r.max_rel_error), textcoords="offset points", xytext=(4, 4),
+                        fontsize=7, color=line.get_color())
+            if not r.converged:
+                ax.plot(r.wall_time, r.max_rel_error, "x", color="red", markersize=10)
+    ax.set_xlabel("wall time of the analysis [s]")
+    ax.set_ylabel("max relative error against the reference")
+    ax.set_title("error against run time (labels: DoFs; red x: not converged)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return True
+
+
+def plot_load_displacement(runs: list[BenchRun], path: str) -> bool:
+    """Each tracked output against the load factor for every mesh of one scene, reference as markers."""
+    plt = _pyplot()
+    runs = [r for r in runs if r.failure is None and r.history.get("load_factor")]
+    if plt is None or not runs:
+        return False
+    names = [k for k in runs[0].history if k != "load_factor"]
+    if not names:
+        return False
+    fig, axes = plt.subplots(1, len(names), figsize=(4.5 * len(names), 4), squeeze=False)
+    reference = runs[0].reference or {}
+    for ax, name in zip(axes[0], names):
+        for k, r in enumerate(runs):
+            lam = [0.0] + list(r.history["load_factor"])
+            val = [0.0] + list(r.history[name])
+            ax.plot(val, lam, "-", lw=1.2, alpha=0.5 + 0.5 * (k + 1) / len(runs), label=r.label)
+        if name in reference:
+            lf, ref = reference[name]
+            ax.plot(ref, lf, "ko", ms=3.5, mfc="none", label="reference")
+        ax.set_xlabel(name)
+        ax.set_ylabel("load factor")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(runs[0].scene)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return True
+
+
+def _jsonable(obj):
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return repr(obj) if not isinstance(obj, (str, int, float, bool, type(None), list, dict, tuple)) else obj
+
+
+def _clean(value):
+    """NaN and infinities as null, numpy values as Python values, recursively (strict JSON)."""
+    if isinstance(value, dict):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    return _jsonable(value)
+
+
+def write_report(runs: list[BenchRun], out_dir: str, command: str = "flexbody bench") -> str:
+    """Write report.md, the PNG plots and bench.json to ``out_dir`` (created if needed); returns report.md's path."""
+    os.makedirs(out_dir, exist_ok=True)
+    scenes: dict[str, list[BenchRun]] = {}
+    for r in runs:
+        scenes.setdefault(r.scene, []).append(r)
+    have_plt = _pyplot() is not None
+    lines = ["# flexbody benchmark report: error against run time", "",
+             f"Written by `{command}` on {platform.processor() or platform.machine()}, "
+             f"Python {platform.python_version()}. Wall time is the analysis alone (mesh, model and numba "
+             "compilation excluded); the error is the largest relative error of the tracked outputs against "
+             "the scene's reference, |value - reference| / max|reference|, at the reference's load factors.", ""]
+    if not have_plt:
+        lines += ["Plots skipped: matplotlib is not installed (`pip install matplotlib`).", ""]
+    elif plot_error_vs_time(runs, os.path.join(out_dir, "error_vs_time.png")):
+        lines += ["![error against wall time](error_vs_time.png)", ""]
+    for scene, rs in scenes.items():
+        lines += [f"## {scene}", ""]
+        ref_source = next((r.reference_source for r in rs if r.reference_source), None)
+        if ref_source:
+            lines += [f"Reference: {ref_source}", ""]
+        lines += [markdown_table(rs), ""]
+        png = f"load_displacement_{_safe(scene)}.png"
+        if have_plt and plot_load_displacement(rs, os.path.join(out_dir, png)):
+            lines += [f"![load against displacement, {scene}]({png})", ""]
+    path = os.path.join(out_dir, "report.md")
+    with open(path, "w") as fh:
+        fh.write("\n".join(lines))
+    data = [{"scene": r.scene, "mesh": r.label, "parameters": r.parameters, "summary": r.summary,
+             "history": r.history, "failure": r.failure} for r in runs]
+    with open(os.path.join(out_dir, "bench.json"), "w") as fh:
+        json.dump(_clean(data), fh, indent=1)
+    return path

@@ -1,0 +1,103 @@
+"""Where a scene comes from: a built-in name, a user's Python file (``build(**parameters) -> Scene``) or a
+user's TOML file (:mod:`flexbody.scenes.toml_scene`). All three build with ``--set`` style overrides and
+report a bad scene as one :class:`SceneError` line."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import importlib.util
+import inspect
+import os
+from pathlib import Path
+from typing import Any, Callable
+
+from flexbody.scenes.scene import Scene
+from flexbody.scenes.toml_scene import SceneError, density_parameters, load_toml_scene
+
+__all__ = ["SceneError", "SceneSource", "open_scene", "scene_kind"]
+
+
+@dataclass
+class SceneSource:
+    """A scene that can be built with parameter overrides.
+
+    Attributes
+    ----------
+    name : what the user gave (a built-in name or a file path)
+    kind : "builtin", "python" or "toml"
+    builder : builds the scene from a dict of overrides
+    keys : the documented parameter keys (None: any key, as for a ``build(**kwargs)`` file)
+    density : the mesh-density parameters and their default values (used by ``flexbody bench``)
+    """
+
+    name: str
+    kind: str
+    builder: Callable[[dict], Scene]
+    keys: list[str] | None
+    density: dict[str, Any]
+
+    def build(self, overrides: dict[str, Any] | None = None) -> Scene:
+        """The scene with ``overrides`` applied; raises :class:`SceneError` (one line) on bad input."""
+        overrides = dict(overrides or {})
+        if self.keys is not None:
+            unknown = [k for k in overrides if k not in self.keys]
+            if unknown:
+                raise SceneError(f"unknown parameter(s) {unknown} for scene {self.name!r}; "
+                                 f"documented keys: {', '.join(self.keys)}")
+        try:
+            return self.builder(overrides)
+        except SceneError:
+            raise
+        except (ValueError, TypeError, KeyError) as exc:
+            msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
+            raise SceneError(f"cannot build scene {self.name!r}: {str(msg).splitlines()[0] if msg else exc!r}") from None
+
+
+def scene_kind(name: str) -> str:
+    """"builtin", "python" or "toml" for a scene argument (by suffix for files)."""
+    from flexbody.scenes.builtin import BUILTIN
+    if name in BUILTIN:
+        return "builtin"
+    suffix = Path(name).suffix.lower()
+    if suffix == ".py":
+        return "python"
+    if suffix == ".toml":
+        return "toml"
+    raise SceneError(f"unknown scene {name!r}; built-in scenes: {', '.join(BUILTIN)} "
+                     "(or give a path to a .toml or .py scene file)")
+
+
+def _function_source(name: str, kind: str, func: Callable) -> SceneSource:
+    params = inspect.signature(func).parameters
+    any_key = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
+    keys = None if any_key else [k for k, p in params.items()
+                                 if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    density = {k: p.default for k, p in params.items() if k.startswith("n")
+               and isinstance(p.default, int) and not isinstance(p.default, bool) and k != "n_sides"}
+    return SceneSource(name, kind, lambda overrides: func(**overrides), keys, density)
+
+
+def _python_builder(path: str) -> Callable:
+    if not os.path.isfile(path):
+        raise SceneError(f"scene file {path!r} does not exist")
+    spec = importlib.util.spec_from_file_location("flexbody_user_scene", path)
+    module = importlib.util.module_from_spec(spec)
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:  # a user's file: report, do not trace back into flexbody
+        raise SceneError(f"cannot load scene file {path!r}: {type(exc).__name__}: {exc}") from None
+    if not callable(getattr(module, "build", None)):
+        raise SceneError(f"scene file {path!r} must define a function build(**parameters) -> Scene")
+    return module.build
+
+
+def open_scene(name: str) -> SceneSource:
+    """The :class:`SceneSource` of a built-in scene name or a ``.py`` / ``.toml`` scene file."""
+    kind = scene_kind(name)
+    if kind == "builtin":
+        from flexbody.scenes.builtin import BUILTIN
+        return _function_source(name, kind, BUILTIN[name])
+    if kind == "python":
+        return _function_source(name, kind, _python_builder(name))
+    density = density_parameters(name)  # also reports a missing or malformed file now
+    return SceneSource(name, kind, lambda overrides: load_toml_scene(name, overrides), None, density)

@@ -1,0 +1,568 @@
+"""TOML scene files: a shell model described in a text file, run with ``flexbody run FILE.toml``.
+
+The format is documented in ``docs/scenes.md``; ``examples/clamped_plate.toml`` is a worked example.
+In short (every table but ``[mesh]``, ``[material]`` and one ``[[output]]`` is optional)::
+
+    name = "clamped_plate"
+    [mesh]                 generator = "strip" + its parameters, or file = "plate.msh"
+    [material]             young, poisson, thickness, density, shear_correction
+    [element]              tying = true, kernel = "numba"
+    [[bc]]                 type = "fix" | "symmetry" on a node selection
+    [[load]]               type = "nodal" | "edge_force" | "edge_moment" | "surface_force" | "pressure"
+    [analysis]             method = "load_control" | "arc_length", steps, max_load_factor, ...
+    [analysis.newton]      any field of integrators.newton.NewtonSettings
+    [[output]]             name, a node selection of one node, component or direction, scale
+    [reference]            file = "ref.csv", load_factor = column, columns = {output = column}
+
+A node selection is exactly one of ``set`` (a node or edge set name, or a list of them), ``nodes`` (indices),
+``near`` (the node nearest a point) or ``plane`` (``{point = [...], normal = [...]}``: the nodes on it).
+
+Every error is a :class:`SceneError` whose one-line message names the file, the key and the bad value.
+``--set KEY=VALUE`` overrides a value by its dotted key (``mesh.nx``, ``load.0.value``) or by its last part
+when that is unambiguous (``nx``, ``thickness``, ``steps``).
+"""
+
+from __future__ import annotations
+
+import copy
+import inspect
+import math
+from pathlib import Path
+import tomllib
+from typing import Any, Callable
+
+import numpy as np
+
+from flexbody.scenes.scene import Output, Reference, Scene, StaticAnalysis
+
+
+class SceneError(ValueError):
+    """A scene that cannot be built as given; the message is one line naming the key and value."""
+
+
+_REQUIRED = object()
+
+#: mesh generators by name, and which of their parameters set the mesh density (used by ``flexbody bench``)
+GENERATOR_NAMES = ("strip", "slit_annulus", "annulus", "cylinder", "spherical_cap", "regular_polygon")
+DENSITY_PARAMETERS = {
+    "strip": ("nx", "ny"), "slit_annulus": ("n_radial", "n_circ"), "annulus": ("n_radial", "n_circ"),
+    "cylinder": ("n_circ", "n_axial"), "spherical_cap": ("n_meridian", "n_circ"), "regular_polygon": ("n_rings",),
+}
+#: generator parameters in radians that may be given in degrees with the suffix ``_deg``
+_RADIAN_PARAMETERS = ("angle",)
+_SECTIONS = ("name", "description", "mesh", "material", "element", "bc", "load", "analysis", "output", "reference")
+_SELECTORS = ("set", "nodes", "near", "plane")
+_MATERIAL_KEYS = ("young", "poisson", "thickness", "density", "shear_correction")
+_ANALYSIS_KEYS = ("method", "steps", "max_load_factor", "load_factors", "arc_increment", "max_load_increment",
+                  "newton")
+_ELEMENT_KEYS = ("tying", "kernel")
+_COMPONENTS = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Reading and overriding
+# ----------------------------------------------------------------------------------------------------------
+
+def read_toml(path: str | Path) -> dict:
+    """The parsed TOML document of a scene file.
+
+    Raises
+    ------
+    SceneError
+        If the file is missing or not valid TOML (the message carries tomllib's line and column).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise SceneError(f"scene file {str(path)!r} does not exist")
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"scene file {str(path)!r} is not valid TOML: {exc}") from None
+    except OSError as exc:
+        raise SceneError(f"cannot read scene file {str(path)!r}: {exc.strerror or exc}") from None
+
+
+def flatten(doc: dict, prefix: str = "") -> dict[str, Any]:
+    """The leaves of a TOML document by dotted key; arrays of tables are indexed (``load.0.value``)."""
+    out: dict[str, Any] = {}
+    for key, value in doc.items():
+        path = f"{prefix}{key}"
+        if isinstance(value, dict):
+            out.update(flatten(value, path + "."))
+        elif isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+            for i, item in enumerate(value):
+                out.update(flatten(item, f"{path}.{i}."))
+        else:
+            out[path] = value
+    return out
+
+
+def _section_keys(doc: dict) -> dict[str, str]:
+    """Bare keys that may be set although the document does not write them: key -> dotted key."""
+    keys = {k: f"material.{k}" for k in _MATERIAL_KEYS}
+    keys.update({k: f"analysis.{k}" for k in _ANALYSIS_KEYS if k != "newton"})
+    keys.update({k: f"element.{k}" for k in _ELEMENT_KEYS})
+    generator = doc.get("mesh", {}).get("generator") if isinstance(doc.get("mesh"), dict) else None
+    if generator in GENERATOR_NAMES:
+        for k in inspect.signature(_generator(generator)).parameters:
+            keys[k] = f"mesh.{k}"
+    return keys
+
+
+def resolve_key(doc: dict, key: str, where: str) -> str:
+    """The dotted key that ``--set key=...`` addresses in ``doc`` (see the module docstring)."""
+    leaves = flatten(doc)
+    if "." in key or key in leaves:
+        return key
+    matches = [k for k in leaves if k.rsplit(".", 1)[-1] == key]
+    if len(matches) == 1:
+        return matches[0]
+    if len(matches) > 1:
+        raise SceneError(f"{where}: --set key {key!r} is ambiguous; use one of {', '.join(matches)}")
+    known = _section_keys(doc)
+    if key in known:
+        return known[key]
+    raise SceneError(f"{where}: unknown parameter {key!r}; documented keys: {', '.join(sorted(leaves))} "
+                     "(or any dotted key of the format, see docs/scenes.md)")
+
+
+def apply_overrides(doc: dict, overrides: dict[str, Any], where: str) -> dict:
+    """A copy of ``doc`` with the ``--set`` overrides applied (keys as in :func:`resolve_key`)."""
+    doc = copy.deepcopy(doc)
+    for key, value in overrides.items():
+        parts = resolve_key(doc, key, where).split(".")
+        node: Any = doc
+        for depth, part in enumerate(parts[:-1]):
+            here = ".".join(parts[:depth + 1])
+            if isinstance(node, list):
+                if not part.isdigit() or int(part) >= len(node):
+                    raise SceneError(f"{where}: --set {key}: {'.'.join(parts[:depth])} has no entry {part!r} "
+                                     f"({len(node)} entries, numbered from 0)")
+                node = node[int(part)]
+            elif isinstance(node, dict):
+                node = node.setdefault(part, {})  # a new table; the format check rejects unknown ones
+            else:
+                raise SceneError(f"{where}: --set {key}: {here!r} is a value, not a table")
+        if not isinstance(node, dict):
+            raise SceneError(f"{where}: --set {key}: {'.'.join(parts[:-1])!r} is not a table")
+        node[parts[-1]] = value
+    return doc
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Typed access to a table, with one-line errors naming the key
+# ----------------------------------------------------------------------------------------------------------
+
+class _Table:
+    """A TOML table read key by key; :meth:`done` reports the keys nobody asked for."""
+
+    def __init__(self, data: Any, path: str, where: str):
+        if not isinstance(data, dict):
+            raise SceneError(f"{where}: {path} must be a table, got {data!r}")
+        self.data, self.path, self.where = data, path, where
+        self.used: set[str] = set()
+
+    def key(self, name: str) -> str:
+        return f"{self.path}.{name}" if self.path else name
+
+    def error(self, name: str, message: str) -> SceneError:
+        return SceneError(f"{self.where}: {self.key(name)} {message}")
+
+    def has(self, name: str) -> bool:
+        return name in self.data
+
+    def raw(self, name: str, default: Any = _REQUIRED) -> Any:
+        self.used.add(name)
+        if name not in self.data:
+            if default is _REQUIRED:
+                raise SceneError(f"{self.where}: missing key {self.key(name)}")
+            return default
+        return self.data[name]
+
+    def number(self, name: str, default: Any = _REQUIRED, *, positive: bool = False) -> float:
+        value = self.raw(name, default)
+        if value is None and default is None:
+            return None
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise self.error(name, f"must be a finite number, got {value!r}")
+        if positive and value <= 0:
+            raise self.error(name, f"must be > 0, got {value!r}")
+        return float(value)
+
+    def integer(self, name: str, default: Any = _REQUIRED, *, minimum: int = 1) -> int:
+        value = self.raw(name, default)
+        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+            raise self.error(name, f"must be an integer >= {minimum}, got {value!r}")
+        return value
+
+    def boolean(self, name: str, default: Any = _REQUIRED) -> bool:
+        value = self.raw(name, default)
+        if not isinstance(value, bool):
+            raise self.error(name, f"must be true or false, got {value!r}")
+        return value
+
+    def string(self, name: str, default: Any = _REQUIRED, *, choices: tuple[str, ...] | None = None) -> str:
+        value = self.raw(name, default)
+        if not isinstance(value, str) or not value:
+            raise self.error(name, f"must be a non-empty string, got {value!r}")
+        if choices is not None and value not in choices:
+            raise self.error(name, f"must be one of {', '.join(map(repr, choices))}, got {value!r}")
+        return value
+
+    def vector(self, name: str, default: Any = _REQUIRED) -> np.ndarray:
+        value = self.raw(name, default)
+        ok = (isinstance(value, list) and len(value) == 3
+              and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value))
+        if not ok:
+            raise self.error(name, f"must be a list of three finite numbers, got {value!r}")
+        return np.array(value, dtype=float)
+
+    def numbers(self, name: str, default: Any = _REQUIRED) -> list[float]:
+        value = self.raw(name, default)
+        ok = (isinstance(value, list) and len(value) > 0
+              and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value))
+        if not ok:
+            raise self.error(name, f"must be a non-empty list of finite numbers, got {value!r}")
+        return [float(v) for v in value]
+
+    def table(self, name: str, default: Any = _REQUIRED) -> "_Table":
+        return _Table(self.raw(name, default), self.key(name), self.where)
+
+    def tables(self, name: str) -> list["_Table"]:
+        value = self.raw(name, [])
+        if isinstance(value, dict):
+            value = [value]
+        if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+            raise self.error(name, f"must be an array of tables ([[{name}]]), got {value!r}")
+        return [_Table(v, f"{self.key(name)}.{i}", self.where) for i, v in enumerate(value)]
+
+    def reject_unknown(self, known: tuple[str, ...]) -> None:
+        """Report a key that is not in ``known`` before anything is built."""
+        unknown = [k for k in self.data if k not in known]
+        if unknown:
+            where = f"[{self.path}]" if self.path else "the top level"
+            raise SceneError(f"{self.where}: unknown key {self.key(unknown[0])!r}; "
+                             f"keys allowed in {where}: {', '.join(known)}")
+
+    def done(self, known: tuple[str, ...] | list[str] | None = None) -> None:
+        unknown = [k for k in self.data if k not in self.used]
+        if unknown:
+            allowed = list(dict.fromkeys(known)) if known is not None else sorted(self.used)
+            where = f"[{self.path}]" if self.path else "the top level"
+            raise SceneError(f"{self.where}: unknown key {self.key(unknown[0])!r}; "
+                             f"keys allowed in {where}: {', '.join(allowed)}")
+
+
+def _wrap(where: str, key: str, func: Callable, *args, **kwargs):
+    """Call a flexbody constructor and turn its ValueError into a one-line SceneError naming ``key``."""
+    try:
+        return func(*args, **kwargs)
+    except (ValueError, TypeError) as exc:
+        message = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        if message.lower().startswith(key.lower() + " "):  # "material: material thickness ..." -> once
+            raise SceneError(f"{where}: {message}") from None
+        raise SceneError(f"{where}: {key}: {message}") from None
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Sections
+# ----------------------------------------------------------------------------------------------------------
+
+def _generator(name: str) -> Callable:
+    from flexbody.mesh import generators
+    return getattr(generators, name)
+
+
+def _build_mesh(t: _Table, folder: Path):
+    """The mesh of ``[mesh]``: a generator and its parameters, or a mesh file."""
+    if t.has("generator") == t.has("file"):
+        raise SceneError(f"{t.where}: [mesh] needs exactly one of 'generator' (one of "
+                         f"{', '.join(GENERATOR_NAMES)}) or 'file'")
+    if t.has("file"):
+        from flexbody.mesh.io import read_mesh
+        path = Path(t.string("file"))
+        t.done(["file"])
+        return _wrap(t.where, "mesh.file", read_mesh, path if path.is_absolute() else folder / path)
+    name = t.string("generator", choices=GENERATOR_NAMES)
+    func = _generator(name)
+    signature = inspect.signature(func).parameters
+    kwargs = {}
+    for pname, param in signature.items():
+        deg = f"{pname}_deg"
+        if pname in _RADIAN_PARAMETERS and t.has(deg):
+            if t.has(pname):
+                raise SceneError(f"{t.where}: give mesh.{pname} (radians) or mesh.{deg} (degrees), not both")
+            kwargs[pname] = math.radians(t.number(deg))
+        elif t.has(pname):
+            kwargs[pname] = t.raw(pname)
+        elif param.default is inspect.Parameter.empty:
+            raise SceneError(f"{t.where}: missing key mesh.{pname} (generator {name!r} needs "
+                             f"{', '.join(p for p, q in signature.items() if q.default is inspect.Parameter.empty)})")
+    known = ["generator", *signature, *(f"{p}_deg" for p in signature if p in _RADIAN_PARAMETERS)]
+    t.done(known)
+    return _wrap(t.where, f"mesh (generator {name!r})", func, **kwargs)
+
+
+def _select_nodes(t: _Table, mesh, *, single: bool = False) -> np.ndarray:
+    """The nodes of a node selection: exactly one of set, nodes, near, plane."""
+    given = [k for k in _SELECTORS if t.has(k)]
+    if len(given) != 1:
+        raise SceneError(f"{t.where}: [{t.path}] needs exactly one node selection of "
+                         f"{', '.join(_SELECTORS)}, got {given or 'none'}")
+    kind = given[0]
+    if kind == "set":
+        value = t.raw("set")
+        names = [value] if isinstance(value, str) else value
+        if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
+            raise t.error("set", f"must be a set name or a list of set names, got {value!r}")
+        nodes = np.unique(np.concatenate([_wrap(t.where, t.key("set"), mesh.node_set, n) for n in names]))
+    elif kind == "nodes":
+        value = t.raw("nodes")
+        if (not isinstance(value, list) or not value
+                or not all(isinstance(i, int) and not isinstance(i, bool) for i in value)):
+            raise t.error("nodes", f"must be a non-empty list of node indices, got {value!r}")
+        bad = [i for i in value if not 0 <= i < mesh.n_nodes]
+        if bad:
+            raise t.error("nodes", f"names node {bad[0]}, but the mesh has nodes 0..{mesh.n_nodes - 1}")
+        nodes = np.unique(np.array(value, dtype=int))
+    elif kind == "near":
+        nodes = np.array([mesh.nearest_node(t.vector("near"))])
+    else:
+        plane = t.table("plane")
+        point, normal = plane.vector("point"), plane.vector("normal")
+        plane.done(["point", "normal"])
+        if not np.linalg.norm(normal) > 0:
+            raise plane.error("normal", f"must be a nonzero vector, got {normal.tolist()}")
+        size = float(np.ptp(mesh.nodes, axis=0).max()) or 1.0
+        distance = (mesh.nodes - point) @ (normal / np.linalg.norm(normal))
+        nodes = np.flatnonzero(np.abs(distance) <= 1e-8 * size)
+        if nodes.size == 0:
+            raise SceneError(f"{t.where}: {t.key('plane')} selects no nodes (no node lies on the plane "
+                             f"through {point.tolist()} with normal {normal.tolist()})")
+    if single and nodes.size != 1:
+        raise SceneError(f"{t.where}: {t.key(kind)} must select one node, it selects {nodes.size}")
+    return nodes
+
+
+def _build_bcs(tables: list[_Table], mesh) -> list:
+    from flexbody.constraints import Fix, Symmetry
+    out = []
+    for t in tables:
+        kind = t.string("type", choices=("fix", "symmetry"))
+        nodes = _select_nodes(t, mesh)
+        if kind == "fix":
+            comps = t.raw("components", "all")
+            if not (isinstance(comps, str) or (isinstance(comps, list) and comps
+                                               and all(isinstance(c, str) for c in comps))):
+                raise t.error("components", f"must be a component name or a list of them, got {comps!r}")
+            out.append(_wrap(t.where, t.key("components"), Fix, nodes, comps))
+        else:
+            if t.has("normal"):
+                normal = t.vector("normal")
+            elif t.has("plane"):
+                normal = np.array(t.data["plane"]["normal"], dtype=float)
+            else:
+                raise SceneError(f"{t.where}: missing key {t.key('normal')} (the symmetry plane's normal)")
+            out.append(_wrap(t.where, t.key("normal"), Symmetry, nodes, normal))
+        t.done(["type", *_SELECTORS, "components" if kind == "fix" else "normal"])
+    return out
+
+
+def _edges(t: _Table, mesh) -> np.ndarray:
+    value = t.raw("set")
+    names = [value] if isinstance(value, str) else value
+    if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
+        raise t.error("set", f"must be an edge set name or a list of them, got {value!r}")
+    return np.vstack([_wrap(t.where, t.key("set"), mesh.edge_set, n) for n in names])
+
+
+def _nodal_loads(vectors: np.ndarray, key: str) -> list:
+    from flexbody.loads import NodalLoad
+    nodes = np.flatnonzero(np.any(vectors != 0, axis=1))
+    return [NodalLoad([i], **{key: vectors[i]}) for i in nodes]
+
+
+def _build_loads(tables: list[_Table], mesh) -> list:
+    from flexbody.loads import FollowerPressure, NodalLoad, nodal_vectors_from_area, nodal_vectors_from_edges
+    kinds = ("nodal", "edge_force", "edge_moment", "surface_force", "pressure")
+    out = []
+    for t in tables:
+        kind = t.string("type", choices=kinds)
+        if kind == "nodal":
+            nodes = _select_nodes(t, mesh)
+            force, moment = t.vector("force", [0, 0, 0]), t.vector("moment", [0, 0, 0])
+            follower = t.boolean("follower", False)
+            out.append(_wrap(t.where, t.path, NodalLoad, nodes, force, moment, follower))
+            t.done(["type", *_SELECTORS, "force", "moment", "follower"])
+        elif kind in ("edge_force", "edge_moment"):
+            edges, density = _edges(t, mesh), t.vector("density")
+            vectors = nodal_vectors_from_edges(mesh.nodes, edges, density, mesh.n_nodes)
+            out += _nodal_loads(vectors, "force" if kind == "edge_force" else "moment")
+            t.done(["type", "set", "density"])
+        elif kind == "surface_force":
+            out += _nodal_loads(nodal_vectors_from_area(mesh, t.vector("density")), "force")
+            t.done(["type", "density"])
+        else:
+            out.append(FollowerPressure(t.number("value")))
+            t.done(["type", "value"])
+    return out
+
+
+def _build_newton(t: _Table | None):
+    from dataclasses import fields
+
+    from integrators.newton import NewtonSettings
+    if t is None:
+        return NewtonSettings()
+    kwargs = {}
+    names = [f.name for f in fields(NewtonSettings)]
+    for f in fields(NewtonSettings):
+        if not t.has(f.name):
+            continue
+        if f.default.__class__ is bool:
+            kwargs[f.name] = t.boolean(f.name)
+        elif f.default.__class__ is int:
+            kwargs[f.name] = t.integer(f.name)
+        elif f.default.__class__ is str:
+            kwargs[f.name] = t.string(f.name)
+        else:
+            kwargs[f.name] = t.number(f.name)
+    t.done(names)
+    return _wrap(t.where, "analysis.newton", NewtonSettings, **kwargs)
+
+
+def _build_analysis(t: _Table) -> StaticAnalysis:
+    method = t.string("method", "load_control", choices=("load_control", "arc_length"))
+    newton = _build_newton(t.table("newton") if t.has("newton") else None)
+    lam_max = t.number("max_load_factor", 1.0, positive=True)
+    if method == "load_control":
+        if t.has("load_factors") and t.has("steps"):
+            raise SceneError(f"{t.where}: give analysis.steps or analysis.load_factors, not both")
+        if t.has("load_factors"):
+            lf = t.numbers("load_factors")
+            if any(b <= a for a, b in zip([0.0] + lf, lf)):
+                raise t.error("load_factors", f"must be positive and increasing, got {lf}")
+        else:
+            steps = t.integer("steps", 10)
+            lf = list(np.linspace(0.0, lam_max, steps + 1)[1:])
+        t.done(["method", "steps", "max_load_factor", "load_factors", "newton"])
+        return StaticAnalysis("load_control", tuple(lf), newton=newton)
+    arc = t.number("arc_increment", 0.05, positive=True)
+    cap = t.number("max_load_increment", None, positive=True)
+    t.done(["method", "max_load_factor", "arc_increment", "max_load_increment", "newton"])
+    return StaticAnalysis("arc_length", (lam_max,), arc, cap, newton)
+
+
+def _build_outputs(tables: list[_Table], mesh) -> list[Output]:
+    out, names = [], set()
+    for t in tables:
+        name = t.string("name")
+        if "/" in name or name in names:
+            raise t.error("name", f"must be unique and without '/', got {name!r}")
+        names.add(name)
+        node = int(_select_nodes(t, mesh, single=True)[0])
+        if t.has("component") == t.has("direction"):
+            raise SceneError(f"{t.where}: [{t.path}] needs exactly one of 'component' (x, y or z) or 'direction'")
+        if t.has("component"):
+            direction = _COMPONENTS[t.string("component", choices=tuple(_COMPONENTS))]
+        else:
+            d = t.vector("direction")
+            if not np.linalg.norm(d) > 0:
+                raise t.error("direction", f"must be a nonzero vector, got {d.tolist()}")
+            direction = tuple(float(v) for v in d / np.linalg.norm(d))
+        out.append(Output(name, node, direction, t.number("scale", 1.0)))
+        t.done(["name", *_SELECTORS, "component", "direction", "scale"])
+    return out
+
+
+def _build_reference(t: _Table, folder: Path, outputs: list[Output]) -> Reference:
+    from flexbody.scenes.reference import read_csv_file
+    path = Path(t.string("file"))
+    path = path if path.is_absolute() else folder / path
+    try:
+        cols, comments = read_csv_file(path)
+    except (OSError, ValueError) as exc:
+        raise SceneError(f"{t.where}: reference.file: {exc}") from None
+    header = list(cols)
+    lf_col = t.string("load_factor", header[0])
+    if lf_col not in cols:
+        raise t.error("load_factor", f"names no column of {str(path)!r}, got {lf_col!r}; columns: {', '.join(header)}")
+    names = [o.name for o in outputs]
+    if t.has("columns"):
+        mapping = t.table("columns")
+        columns = {name: mapping.string(name) for name in list(mapping.data)}
+        for name, col in columns.items():
+            if name not in names:
+                raise mapping.error(name, f"names no [[output]]; outputs: {', '.join(names)}")
+            if col not in cols:
+                raise mapping.error(name, f"names no column of {str(path)!r}, got {col!r}; columns: {', '.join(header)}")
+    else:
+        columns = {name: name for name in names if name in cols}
+        if not columns:
+            raise SceneError(f"{t.where}: reference.file {str(path)!r} has no column named like an output "
+                             f"({', '.join(names)}); map them with reference.columns = {{output = \"column\"}}")
+    source = t.string("source", comments[0] if comments else str(path))
+    t.done(["file", "load_factor", "columns", "source"])
+    return Reference(np.asarray(cols[lf_col]), {n: np.asarray(cols[c]) for n, c in columns.items()}, source)
+
+
+# ----------------------------------------------------------------------------------------------------------
+# The scene
+# ----------------------------------------------------------------------------------------------------------
+
+def scene_from_document(doc: dict, path: str | Path) -> Scene:
+    """Build a :class:`Scene` from a parsed TOML document; ``path`` names it and anchors relative files."""
+    from flexbody.assembly import Model
+    from flexbody.body import ShellBody
+    from flexbody.shell.material import ShellMaterial
+
+    path = Path(path)
+    where, folder = f"scene file {str(path)!r}", path.resolve().parent
+    top = _Table(doc, "", where)
+    top.reject_unknown(_SECTIONS)
+    name = top.string("name", path.stem)
+    description = top.string("description", f"scene file {path.name}")
+    mesh = _build_mesh(top.table("mesh"), folder)
+    mt = top.table("material")
+    material = _wrap(where, "material", ShellMaterial, mt.number("young"), mt.number("poisson"),
+                     mt.number("thickness"), mt.number("density", 0.0), mt.number("shear_correction", 5.0 / 6.0))
+    mt.done(_MATERIAL_KEYS)
+    et = top.table("element", {})
+    tying, kernel = et.boolean("tying", True), et.string("kernel", "numba", choices=("numba", "reference"))
+    et.done(_ELEMENT_KEYS)
+    body = _wrap(where, "element", ShellBody, mesh, material, tying=tying, kernel=kernel)
+    constraints = _build_bcs(top.tables("bc"), mesh)
+    loads = _build_loads(top.tables("load"), mesh)
+    if not loads:
+        raise SceneError(f"{where}: a scene needs at least one [[load]]")
+    model = _wrap(where, "bc/load", Model, body, constraints, loads)
+    analysis = _build_analysis(top.table("analysis", {}))
+    outputs = _build_outputs(top.tables("output"), mesh)
+    if not outputs:
+        raise SceneError(f"{where}: a scene needs at least one [[output]]")
+    reference = _build_reference(top.table("reference"), folder, outputs) if top.has("reference") else None
+    return Scene(name, description, model, analysis, outputs, reference, flatten(doc))
+
+
+def load_toml_scene(path: str | Path, overrides: dict[str, Any] | None = None) -> Scene:
+    """Read, override (``--set``) and build a TOML scene file."""
+    doc = read_toml(path)
+    doc = apply_overrides(doc, overrides or {}, f"scene file {str(path)!r}")
+    return scene_from_document(doc, path)
+
+
+def density_parameters(path: str | Path) -> dict[str, int]:
+    """The mesh-density parameters (e.g. ``{"mesh.nx": 8, "mesh.ny": 8}``) of a generator scene file."""
+    doc = read_toml(path)
+    mesh = doc.get("mesh", {}) if isinstance(doc.get("mesh"), dict) else {}
+    generator = mesh.get("generator")
+    if generator not in DENSITY_PARAMETERS:
+        return {}
+    defaults = inspect.signature(_generator(generator)).parameters
+    out = {}
+    for name in DENSITY_PARAMETERS[generator]:
+        value = mesh.get(name, defaults[name].default)
+        if isinstance(value, int) and not isinstance(value, bool):
+            out[f"mesh.{name}"] = value
+    return out
