@@ -1774,6 +1774,9 @@ def compress_maps(A: np.ndarray) -> CompressedMaps:
 
 
 def _n_chunks(m: int) -> int:
+    """Parallel chunks: a few per thread, and one (no thread hand-off) for small batches."""
+    if m < 128:
+        return 1
     return max(1, min(m, 4 * numba.get_num_threads()))
 
 

@@ -1,0 +1,143 @@
+"""Inertia of the shell: lumped nodal mass and director (rotary) inertia, nodal inertia forces and tangents.
+
+Kinetic energy of a Reissner-Mindlin shell with mid-surface position x and director t (|t| = 1)::
+
+    T = 1/2 int_A int_{-h/2}^{h/2} rho |xdot + z tdot|^2 dz dA = 1/2 int_A (rho h |xdot|^2 + rho h^3/12 |tdot|^2) dA
+
+(the cross term vanishes because the reference surface is the mid-surface).
+
+Choice: lumped (HRZ) mass
+-------------------------
+The quadratic triangle's row-sum lumping gives zero corner masses (a corner shape function integrates to
+zero), so the nodal area is the Hinton-Rock-Zienkiewicz (HRZ) lumping: the diagonal of the consistent
+matrix int N_I^2 dA, scaled so that the nodal areas add up to the element area (corners 3/57, midsides
+16/57 of a straight-sided element). The nodal mass is m_I = rho h A_I and the nodal director inertia
+j_I = rho h^3/12 A_I. Why lumped:
+
+* the director inertia is then a nodal term, j_I |tdot_I|^2 / 2, expressed in the nodal local frame with a
+  *constant* matrix J_I = j_I diag(1, 1, 0), which is the point of the local-frame formulation; a consistent
+  director mass would couple the interpolated relative rotations and depend on the configuration;
+* with global translational velocities (see below) the translational mass m_I I is constant as well, so the
+  whole mass matrix is a constant diagonal and the iteration matrix needs no mass re-assembly;
+* HRZ lumping of six-node triangles converges at the rate of the consistent mass for the lowest modes.
+
+Nodal inertia forces
+--------------------
+Two parametrisations of the nodal velocity are provided (both with a local angular velocity w,
+Rdot = R hat(w)):
+
+``R^3 x SO(3)`` (used by :mod:`flexbody.dynamics`): global translational velocity xdot. Force in the
+    global rows: f_x = m xdot_dot; rotary part f_w = J wdot + w x (J w). Nothing depends on the configuration
+    unless the translational rows are written in the local frame (``inertia_force_local_rows``), where
+    f_u = R^T m a and its derivative along R exp(eps e_k) is hat(R^T m a).
+``SE(3) local`` velocities v = R^T xdot: xddot = R (vdot + w x v), so f_u = m (vdot + w x v) (a Coriolis
+    term appears) with tangents d/dvdot = m I, d/dv = m hat(w), d/dw = -m hat(v).
+
+Shell director and gyroscopic terms: the 5-DoF node has no drilling velocity (w_3 = 0: the nodal frame is
+parallel-transported with the director, it is not a DoF), and J = j diag(1, 1, 0), so w x (J w) = j w x w = 0
+identically. The director's virtual work j tddot . delta t with delta t = R (delta theta x e3) reduces to
+j (wdot_1 delta theta_1 + wdot_2 delta theta_2): tddot = R (wdot x e3 - |w|^2 e3) and the centripetal part
+-|w|^2 e3 is normal to every admissible variation (tests/shell/test_inertia.py checks this on a trajectory).
+The general formulas with full J and w are kept for other bodies (and are tested against finite differences).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexbody.lie import so3
+from flexbody.shell.geometry import EVAL_N, GAUSS_OFFSET, N_GAUSS
+
+#: shape functions at the 7 Gauss points, (7, 6)
+GAUSS_N = EVAL_N[GAUSS_OFFSET:GAUSS_OFFSET + N_GAUSS]
+
+
+@dataclass(frozen=True)
+class NodalInertia:
+    """Lumped nodal inertia: translational mass m_I and director inertia j_I (J_I = j_I diag(1, 1, 0))."""
+
+    mass: np.ndarray      # (n,)
+    rotary: np.ndarray    # (n,)
+
+    @property
+    def total_mass(self) -> float:
+        return float(self.mass.sum())
+
+
+def hrz_nodal_areas(weights: np.ndarray, conn: np.ndarray, n_nodes: int) -> np.ndarray:
+    """HRZ-lumped nodal areas A_I (n,).
+
+    Parameters
+    ----------
+    weights : (m, 7) Gauss weight x reference area element of each element (``ReferenceGeometry.weights``)
+    conn : (m, 6) element connectivity
+    n_nodes : number of nodes
+    """
+    area = weights.sum(axis=1)                               # element areas
+    diag = np.einsum("eg,gi->ei", weights, GAUSS_N**2)       # int N_I^2 dA (exact: degree 4 <= 5)
+    lumped = diag * (area / diag.sum(axis=1))[:, None]       # scaled to the element area
+    out = np.zeros(n_nodes)
+    np.add.at(out, conn, lumped)
+    return out
+
+
+def nodal_inertia(body) -> NodalInertia:
+    """Lumped inertia of a :class:`flexbody.body.ShellBody` from its material density and thickness."""
+    mat = body.material
+    areas = hrz_nodal_areas(body.reference.weights, body.mesh.elements, body.n_nodes)
+    return NodalInertia(mat.density * mat.thickness * areas, mat.density * mat.thickness**3 / 12.0 * areas)
+
+
+def director_tensor(j: float) -> np.ndarray:
+    """The local rotary inertia J = j diag(1, 1, 0) of a shell node (no drilling inertia)."""
+    return np.diag([j, j, 0.0])
+
+
+# -- rotary part, general J (3 x 3) -------------------------------------------------------------------------
+def rotary_force(J: np.ndarray, w: np.ndarray, wdot: np.ndarray) -> np.ndarray:
+    """Euler's rotary inertia force J wdot + w x (J w) in the local frame."""
+    return J @ wdot + np.cross(w, J @ w)
+
+
+def rotary_tangents(J: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(d f/d wdot, d f/d w) of :func:`rotary_force`: J and hat(w) J - hat(J w) (gyroscopic matrix)."""
+    return J.copy(), so3.hat(w) @ J - so3.hat(J @ w)
+
+
+# -- translational part -------------------------------------------------------------------------------------
+def translational_force_local_rows(m: float, R: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """f_u = R^T m a: the inertia force of a global acceleration a in the local rows of frame R."""
+    return m * (R.T @ a)
+
+
+def translational_local_rows_tangents(m: float, R: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(d f_u/d a, d f_u/d theta) of :func:`translational_force_local_rows`; theta along R exp(hat(theta)).
+
+    exp(-hat(theta)) R^T m a = R^T m a - theta x (R^T m a) = R^T m a + hat(R^T m a) theta.
+    """
+    return m * R.T, so3.hat(m * (R.T @ a))
+
+
+def translational_force_se3(m: float, v: np.ndarray, w: np.ndarray, vdot: np.ndarray) -> np.ndarray:
+    """f_u = m (vdot + w x v) for local translational velocity v = R^T xdot (xddot = R (vdot + w x v))."""
+    return m * (vdot + np.cross(w, v))
+
+
+def translational_se3_tangents(m: float, v: np.ndarray, w: np.ndarray):
+    """(d f_u/d vdot, d f_u/d v, d f_u/d w) of :func:`translational_force_se3`: m I, m hat(w), -m hat(v)."""
+    return m * np.eye(3), m * so3.hat(w), -m * so3.hat(v)
+
+
+# -- the 5-DoF shell node -----------------------------------------------------------------------------------
+def shell_node_force(m: float, j: float, a: np.ndarray, w: np.ndarray, wdot: np.ndarray) -> np.ndarray:
+    """Inertia force of a 5-DoF shell node [global translation (3), in-plane rotations (2)].
+
+    a : global acceleration (3,);  w, wdot : in-plane local angular velocity and acceleration (2,)
+    (the drilling component is not a DoF: w_3 = 0). With J = j diag(1, 1, 0) the gyroscopic term
+    w x (J w) vanishes, so the force is linear: [m a, j wdot].
+    """
+    w3 = np.array([w[0], w[1], 0.0])
+    f_rot = rotary_force(director_tensor(j), w3, np.array([wdot[0], wdot[1], 0.0]))
+    return np.concatenate([m * np.asarray(a, float), f_rot[:2]])
