@@ -13,6 +13,22 @@ from dataclasses import dataclass
 import numpy as np
 
 _AXES = {"x": 0, "y": 1, "z": 2}
+
+
+def node_indices(nodes, what: str) -> np.ndarray:
+    """Node indices as a 1-d int array; floats that are not whole numbers (1.5) are an error, not truncated."""
+    try:
+        arr = np.atleast_1d(np.asarray(nodes))
+        if arr.dtype == bool:
+            raise TypeError
+        values = arr.astype(float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} nodes must be integer node indices, got {nodes!r}") from None
+    if arr.ndim != 1:
+        arr, values = arr.ravel(), values.ravel()
+    if not np.all(np.isfinite(values)) or np.any(values != np.round(values)):
+        raise ValueError(f"{what} nodes must be integer node indices, got {nodes!r}")
+    return values.astype(np.int64)
 _VALID = {"x", "y", "z", "r1", "r2", "all", "translations", "rotations"}
 
 
@@ -28,7 +44,7 @@ class Fix:
     components: tuple[str, ...] = ("all",)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "nodes", np.atleast_1d(np.asarray(self.nodes, dtype=int)))
+        object.__setattr__(self, "nodes", node_indices(self.nodes, "Fix"))
         comps = (self.components,) if isinstance(self.components, str) else tuple(self.components)
         bad = [c for c in comps if c not in _VALID]
         if bad:
@@ -62,7 +78,7 @@ class Symmetry:
     normal: np.ndarray
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "nodes", np.atleast_1d(np.asarray(self.nodes, dtype=int)))
+        object.__setattr__(self, "nodes", node_indices(self.nodes, "Symmetry"))
         n = np.asarray(self.normal, dtype=float)
         if n.shape != (3,) or not np.all(np.isfinite(n)) or np.linalg.norm(n) == 0:
             raise ValueError(f"symmetry normal must be a nonzero finite 3-vector, got {self.normal!r}")

@@ -17,7 +17,10 @@ from flexbody.shell.shape import gauss_triangle_7, shape_derivatives, shape_func
 
 
 def _as_vector(value, name: str) -> np.ndarray:
-    v = np.asarray(value, dtype=float)
+    try:
+        v = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a 3-vector of numbers, got {value!r}") from None
     if v.shape != (3,):
         raise ValueError(f"{name} must be a 3-vector, got {value!r}")
     if not np.all(np.isfinite(v)):
@@ -39,7 +42,8 @@ class NodalLoad:
     follower: bool = False
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "nodes", np.atleast_1d(np.asarray(self.nodes, dtype=int)))
+        from flexbody.constraints import node_indices
+        object.__setattr__(self, "nodes", node_indices(self.nodes, "NodalLoad"))
         object.__setattr__(self, "force", _as_vector(self.force, "force"))
         object.__setattr__(self, "moment", _as_vector(self.moment, "moment"))
 

@@ -14,7 +14,7 @@ from typing import Callable
 
 import numpy as np
 
-from integrators.linear import LinearSolver
+from integrators.linear import LinearSolver, SingularMatrixError
 from integrators.newton import NewtonSettings, NewtonStats, newton_solve
 
 
@@ -30,6 +30,20 @@ class StepRecord:
 
 
 @dataclass
+class FailureReport:
+    """Why and where a run stopped: the step that failed, from which converged load factor to which
+    trial, the residual history of its last attempt, and the cut-backs spent on it."""
+
+    step: int                          # number of the step that failed (1 = the first)
+    load_factor: float                 # the last converged load factor (the state kept)
+    trial_load_factor: float           # the load factor of the last attempt
+    residuals: list[float]             # residual norms of the last attempt
+    reason: str
+    attempts: int                      # attempts at this step (1 + its cut-backs)
+    non_finite: bool = False
+
+
+@dataclass
 class StaticResult:
     state: object                      # the last converged state
     load_factor: float
@@ -39,10 +53,29 @@ class StaticResult:
     message: str = "completed"
     wall_time: float = 0.0
     cutbacks: int = 0
+    failure: FailureReport | None = None
 
 
 def _reference_norm(model, state, lam: float) -> float:
     return abs(lam) * float(np.linalg.norm(model.external_force(state))) or 1.0
+
+
+def _check_support(model) -> None:
+    """A static run needs every rigid-body motion restrained (else the stiffness is singular): models that
+    can tell (``check_static_support``) are asked before the first step."""
+    check = getattr(model, "check_static_support", None)
+    if callable(check):
+        check()
+
+
+def _history(residuals) -> list[str]:
+    return [f"{v:.2e}" for v in residuals]
+
+
+def _failure_message(f: FailureReport) -> str:
+    return (f"step {f.step} to load factor {f.trial_load_factor:.6g} failed ({f.reason}) after {f.attempts} "
+            f"attempt(s); residual history of the last attempt {_history(f.residuals)}; stopped at the last "
+            f"converged load factor {f.load_factor:.6g} (state kept)")
 
 
 def load_control(model, load_factors=None, *, n_steps: int = 10, settings: NewtonSettings | None = None,
@@ -59,8 +92,12 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
     """
     settings = settings or NewtonSettings()
     targets = np.linspace(0, 1, n_steps + 1)[1:] if load_factors is None else np.asarray(load_factors, float)
-    if targets.size == 0 or not np.all(np.isfinite(targets)) or np.any(np.diff(targets) <= 0):
-        raise ValueError(f"load factors must be finite and increasing, got {targets!r}")
+    if targets.ndim != 1 or targets.size == 0 or not np.all(np.isfinite(targets)) or np.any(np.diff(targets) <= 0) \
+            or targets[0] < 0:
+        raise ValueError(f"load factors must be finite, non-negative and increasing, got {targets!r}")
+    if not (np.isfinite(min_step) and min_step > 0):
+        raise ValueError(f"min_step must be positive, got {min_step!r}")
+    _check_support(model)
     state = model.initial_state() if state is None else state
     solver, stats = LinearSolver(), NewtonStats()
     records: list[StepRecord] = []
@@ -68,23 +105,43 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
     first_step = targets[0]
     step = first_step
     max_step = max_step or (targets[-1] - 0.0)
+    attempts = 0
     for target in targets:
         while lam < target - 1e-14:
-            trial = min(lam + step, target)
-            new_state, out = newton_solve(
-                state, lambda q: model.residual(q, trial), lambda q: model.residual_and_tangent(q, trial),
-                model.update, _reference_norm(model, state, trial), settings, solver, stats,
-                dof_scale=model.dof_scale, conjugate=model.conjugate)
-            if not out.converged:
+            # land exactly on the prescribed level (no sliver step, no level missed by round-off)
+            trial = target if lam + step >= target - 1e-12 * max(1.0, abs(target)) else lam + step
+            attempts += 1
+            early = ""
+            try:
+                reference = _reference_norm(model, state, trial)
+            except FloatingPointError as exc:
+                reference, early = np.nan, str(exc)
+            if not np.isfinite(reference):
+                out = None
+            else:
+                new_state, out = newton_solve(
+                    state, lambda q: model.residual(q, trial), lambda q: model.residual_and_tangent(q, trial),
+                    model.update, reference, settings, solver, stats,
+                    dof_scale=model.dof_scale, conjugate=model.conjugate)
+            if out is None or not out.converged:
+                if out is None:
+                    reason = early or "non-finite external load (the reference force is not finite)"
+                    residuals, non_finite, at_start = [], True, True
+                else:
+                    reason, residuals, non_finite = out.reason, out.residuals, out.non_finite
+                    at_start = out.non_finite and out.iterations == 0
                 cutbacks += 1
                 step = (trial - lam) / 2
-                if step < min_step or not adaptive:
-                    msg = (f"step to load factor {trial:.6g} failed ({out.reason}); residual history "
-                           f"{[f'{v:.2e}' for v in out.residuals]}; stopped at the last converged load "
-                           f"factor {lam:.6g}")
-                    return StaticResult(state, lam, records, stats, False, msg, time.perf_counter() - t0,
-                                        cutbacks)
+                # non-finite values in the last converged state or the loads: no cut-back can help
+                if step < min_step or not adaptive or at_start:
+                    if at_start:
+                        reason += "; non-finite at the start of the step, from the last converged state: stopped at once"
+                    failure = FailureReport(len(records) + 1, lam, trial, list(residuals), reason, attempts,
+                                            non_finite)
+                    return StaticResult(state, lam, records, stats, False, _failure_message(failure),
+                                        time.perf_counter() - t0, cutbacks, failure)
                 continue
+            attempts = 0
             state, lam = new_state, trial
             rec = StepRecord(len(records) + 1, lam, out.iterations, out.residuals, time.perf_counter() - t0)
             records.append(rec)
@@ -110,28 +167,50 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
     control at exactly lam_max.
     """
     settings = settings or NewtonSettings()
+    if not (np.isfinite(lam_max) and lam_max > 0 and np.isfinite(initial_increment) and initial_increment > 0):
+        raise ValueError(f"arc-length needs lam_max > 0 and initial_increment > 0, got {lam_max!r} and "
+                         f"{initial_increment!r}")
+    _check_support(model)
     state = model.initial_state() if state is None else state
     solver, stats = LinearSolver(), NewtonStats()
     records: list[StepRecord] = []
-    t0, lam, cutbacks = time.perf_counter(), 0.0, 0
+    t0, lam, cutbacks, attempts = time.perf_counter(), 0.0, 0, 0
 
-    r, K = model.residual_and_tangent(state, 0.0)
-    stats.tangent_updates += 1
-    solver.factorize(K)
-    stats.factorizations += 1
-    dq_f = solver.solve(model.external_force(state))
+    def stop(trial_lam, residuals, reason, non_finite=False):
+        failure = FailureReport(len(records) + 1, lam, float(trial_lam), list(residuals), reason, attempts,
+                                non_finite)
+        return StaticResult(state, lam, records, stats, False, _failure_message(failure),
+                            time.perf_counter() - t0, cutbacks, failure)
+
+    try:
+        r, K = model.residual_and_tangent(state, 0.0)
+        stats.tangent_updates += 1
+        solver.factorize(K)
+        stats.factorizations += 1
+        f0 = model.external_force(state)
+        dq_f = solver.solve(f0)
+    except FloatingPointError as exc:
+        return stop(0.0, [], f"non-finite values in the initial state or loads: {exc}", True)
+    if not np.any(f0):
+        raise ValueError("arc-length needs a nonzero external load (the external force vector is zero)")
     dl = initial_increment * float(np.linalg.norm(dq_f))
     dl0 = dl
     prev_dir = dq_f / np.linalg.norm(dq_f)
     prev_dlam_sign = 1.0
 
     for _ in range(max_steps):
+        attempts += 1
         # predictor along the tangent, in the direction of the previous step
-        r, K = model.residual_and_tangent(state, lam)
-        stats.tangent_updates += 1
-        solver.factorize(K)
-        stats.factorizations += 1
-        dq_f = solver.solve(model.external_force(state))
+        try:
+            r, K = model.residual_and_tangent(state, lam)
+            stats.tangent_updates += 1
+            solver.factorize(K)
+            stats.factorizations += 1
+            dq_f = solver.solve(model.external_force(state))
+        except FloatingPointError as exc:
+            return stop(lam, [], f"non-finite values at the last converged state: {exc}; stopped at once", True)
+        except SingularMatrixError as exc:
+            return stop(lam, [], f"predictor: {exc}")
         sign = np.sign(dq_f @ prev_dir) or prev_dlam_sign
         dlam = sign * dl / np.linalg.norm(dq_f)
         if max_load_increment is not None and abs(dlam) > max_load_increment:
@@ -140,22 +219,31 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
         Dq = dlam * dq_f
         trial = model.update(state, Dq)
         trial_lam = lam + dlam
-        ok, residuals, it = False, [], 0
+        ok, residuals, it, reason, non_finite = False, [], 0, "", False
         ref = _reference_norm(model, state, max(abs(trial_lam), 1e-12))
         for it in range(1, settings.max_iterations + 1):
-            r, K = model.residual_and_tangent(trial, trial_lam)
+            try:
+                r, K = model.residual_and_tangent(trial, trial_lam)
+            except FloatingPointError as exc:
+                reason, non_finite = f"non-finite values at iteration {it}: {exc}", True
+                break
             stats.tangent_updates += 1
             norm = float(np.linalg.norm(r))
             residuals.append(norm)
             if not np.isfinite(norm):
+                reason, non_finite = f"non-finite residual at iteration {it}", True
                 break
             if norm <= max(settings.rtol * ref, settings.atol) and it > 1:
                 ok = True
                 break
-            solver.factorize(K)
-            stats.factorizations += 1
-            a = solver.solve(-r)
-            b = solver.solve(model.external_force(trial))
+            try:
+                solver.factorize(K)
+                stats.factorizations += 1
+                a = solver.solve(-r)
+                b = solver.solve(model.external_force(trial))
+            except (SingularMatrixError, FloatingPointError) as exc:
+                reason = str(exc)
+                break
             # ||Dq + a + x b||^2 = dl^2
             u = Dq + a
             c2, c1, c0 = b @ b, 2 * u @ b, u @ u - dl * dl
@@ -170,13 +258,14 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
             Dq = Dq + dq
             trial_lam += x
             stats.iterations += 1
+        else:
+            reason = f"no convergence in {settings.max_iterations} iterations"
         if not ok:
             cutbacks += 1
             dl /= 2
             if dl < min_increment_ratio * dl0:
-                msg = (f"arc-length step from load factor {lam:.6g} failed after cut-backs; residual history "
-                       f"{[f'{v:.2e}' for v in residuals]}; stopped at the last converged state")
-                return StaticResult(state, lam, records, stats, False, msg, time.perf_counter() - t0, cutbacks)
+                return stop(trial_lam, residuals, f"{reason}; arc length cut back below "
+                            f"{min_increment_ratio:g} of the first", non_finite)
             continue
         if trial_lam >= lam_max:
             # finish exactly at lam_max under load control from the last converged state
@@ -193,7 +282,10 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                                     time.perf_counter() - t0, cutbacks)
             dl /= 2
             cutbacks += 1
+            if dl < min_increment_ratio * dl0:
+                return stop(lam_max, out.residuals, f"final step to lam_max: {out.reason}", out.non_finite)
             continue
+        attempts = 0
         prev_dir = Dq / np.linalg.norm(Dq)
         prev_dlam_sign = np.sign(trial_lam - lam) or prev_dlam_sign
         state, lam = trial, trial_lam

@@ -37,6 +37,17 @@ def _check_length(value, name: str) -> float:
     return v
 
 
+def _curved_mesh(what: str, hint: str, *args, **kwargs) -> Tri6Mesh:
+    """Tri6Mesh(*args, **kwargs); a midside node that validation finds too far off its chord means cells too
+    coarse for the curvature (a quadratic edge over more than ~106 degrees of arc): say so."""
+    try:
+        return Tri6Mesh(*args, **kwargs)
+    except MeshError as exc:
+        if "midside node" not in str(exc):
+            raise
+        raise MeshError(f"{what}: the cells are too coarse for the curvature ({exc}); {hint}") from None
+
+
 def _grid_triangles(nu: int, nv: int, diagonal: str, periodic_v: bool) -> np.ndarray:
     """Connectivity (2 nu nv, 6) on the (2 nu + 1) x (2 nv + 1) point grid, index = i (2 nv + 1) + j."""
     if diagonal not in _DIAGONALS:
@@ -140,7 +151,8 @@ def slit_annulus(inner_radius: float, outer_radius: float, n_radial: int, n_circ
     ns, es = _side_sets(index, nr, nc, {"v_min": "clamped", "v_max": "loaded", "u_min": "inner", "u_max": "outer"})
     ns["A"] = np.array([index(0, 2 * nc)])
     ns["B"] = np.array([index(2 * nr, 2 * nc)])
-    return Tri6Mesh(x, conn, d, ns, es, allow_coincident_nodes=True)
+    return _curved_mesh("slit_annulus", "use more cells around (n_circ >= 5)", x, conn, d, ns, es,
+                        allow_coincident_nodes=True)
 
 
 def annulus(inner_radius: float, outer_radius: float, n_radial: int, n_circ: int,
@@ -160,7 +172,7 @@ def annulus(inner_radius: float, outer_radius: float, n_radial: int, n_circ: int
 
     x, d, conn, index = _structured(surface, (ri, ro), (0.0, 2 * math.pi), nr, nc, diagonal, periodic_v=True)
     ns, es = _side_sets(index, nr, nc, {"u_min": "inner", "u_max": "outer"}, periodic_v=True)
-    return Tri6Mesh(x, conn, d, ns, es)
+    return _curved_mesh("annulus", "use more cells around (n_circ >= 5)", x, conn, d, ns, es)
 
 
 def cylinder(radius: float, length: float, n_circ: int, n_axial: int, angle: float = 2 * math.pi,
@@ -194,10 +206,10 @@ def cylinder(radius: float, length: float, n_circ: int, n_axial: int, angle: flo
             return surface(z, -a)
         x, d, conn, index = _structured(surface_za, (0, length), (0, 2 * math.pi), na, nc, diagonal, periodic_v=True)
         ns, es = _side_sets(index, na, nc, {"u_min": "bottom", "u_max": "top"}, periodic_v=True)
-        return Tri6Mesh(x, conn, d, ns, es)
+        return _curved_mesh("cylinder", "use more cells around (n_circ)", x, conn, d, ns, es)
     x, d, conn, index = _structured(surface_az, (0, angle), (0, length), nc, na, diagonal)
     ns, es = _side_sets(index, nc, na, {"u_min": "start", "u_max": "end", "v_min": "bottom", "v_max": "top"})
-    return Tri6Mesh(x, conn, d, ns, es)
+    return _curved_mesh("cylinder", "use more cells around (n_circ)", x, conn, d, ns, es)
 
 
 def spherical_cap(radius: float, hole_deg: float, n_meridian: int, n_circ: int, angle: float = 2 * math.pi,
@@ -218,6 +230,8 @@ def spherical_cap(radius: float, hole_deg: float, n_meridian: int, n_circ: int, 
     if angle > 2 * math.pi + 1e-12:
         raise MeshError(f"angle must be at most 2 pi, got {angle}")
     full = abs(angle - 2 * math.pi) < 1e-12
+    if full and nc < 2:
+        raise MeshError("a full spherical cap needs n_circ >= 2")
 
     def surface(p, a):
         n = np.stack([np.sin(p) * np.cos(a), np.sin(p) * np.sin(a), np.cos(p)], axis=1)
@@ -229,7 +243,7 @@ def spherical_cap(radius: float, hole_deg: float, n_meridian: int, n_circ: int, 
     if not full:
         names.update({"v_min": "start", "v_max": "end"})
     ns, es = _side_sets(index, nm, nc, names, periodic_v=full)
-    return Tri6Mesh(x, conn, d, ns, es)
+    return _curved_mesh("spherical_cap", "use more cells (n_meridian, n_circ)", x, conn, d, ns, es)
 
 
 def regular_polygon(n_sides: int, radius: float, n_rings: int) -> Tri6Mesh:

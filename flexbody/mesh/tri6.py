@@ -156,7 +156,7 @@ def _as_array(value, dtype, name: str) -> np.ndarray:
 
 
 def _names(node_sets, edge_sets) -> str:
-    names = sorted(node_sets) + [f"{k} (edges)" for k in sorted(edge_sets)]
+    names = sorted(set(node_sets) | set(edge_sets))   # an edge set's nodes are a node set too
     return "node sets: " + (", ".join(names) or "none")
 
 
@@ -174,10 +174,17 @@ def validate(mesh: Tri6Mesh) -> None:
     n, m = len(x), len(conn)
     if n == 0 or m == 0:
         raise MeshError(f"a mesh needs nodes and elements, got {n} nodes and {m} elements")
-    for arr, what in ((x, "coordinates"), (d, "director")):
+    for arr, what in ((x, "coordinates"), (d, "director components")):
         bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1))
         if bad.size:
-            raise MeshError(f"node {bad[0]} has a non-finite {what}: {arr[bad[0]].tolist()}")
+            raise MeshError(f"node {bad[0]} has non-finite {what}: {arr[bad[0]].tolist()}")
+    with np.errstate(over="ignore", invalid="ignore"):
+        _validate_finite_mesh(mesh)
+
+
+def _validate_finite_mesh(mesh: Tri6Mesh) -> None:
+    x, conn, d = mesh.nodes, mesh.elements, mesh.directors
+    n = len(x)
     norms = np.linalg.norm(d, axis=1)
     bad = np.flatnonzero(np.abs(norms - 1.0) > 1e-8)
     if bad.size:
@@ -190,7 +197,9 @@ def validate(mesh: Tri6Mesh) -> None:
     rep = np.flatnonzero(np.any(srt[:, 1:] == srt[:, :-1], axis=1))
     if rep.size:
         raise MeshError(f"element {rep[0]} uses a node twice: {conn[rep[0]].tolist()}")
-    unused = np.setdiff1d(np.arange(n), conn.ravel())
+    used = np.zeros(n, dtype=bool)
+    used[conn.ravel()] = True
+    unused = np.flatnonzero(~used)
     if unused.size:
         raise MeshError(f"node {unused[0]} belongs to no element ({unused.size} unused node(s))")
     if not mesh.allow_coincident_nodes:
@@ -224,12 +233,21 @@ def _check_jacobians(x: np.ndarray, conn: np.ndarray, d: np.ndarray) -> None:
         bad = np.flatnonzero(jac <= 1e-10 * size**2)
         if bad.size:
             e = int(bad[0])
-            area = 0.5 * np.linalg.norm(np.cross(X[e, 1] - X[e, 0], X[e, 2] - X[e, 0]))
+            flat = np.cross(X[e, 1] - X[e, 0], X[e, 2] - X[e, 0])
+            area = 0.5 * np.linalg.norm(flat)
             if area <= 1e-12 * size[e] ** 2:
                 raise MeshError(f"element {e} has zero area (corners {conn[e, :3].tolist()} are collinear)")
-            raise MeshError(f"element {e} is inverted or oriented against the directors at (r, s) = "
-                            f"({p[0]:.3g}, {p[1]:.3g}): Jacobian . director = {jac[e]:.3g}; list its corners "
-                            "counter-clockwise seen from the director and keep midside nodes near their edges")
+            where = f"at (r, s) = ({p[0]:.3g}, {p[1]:.3g}): Jacobian . director = {jac[e]:.3g}"
+            if flat @ D[e, :3].sum(axis=0) <= 0:
+                raise MeshError(f"element {e} is inverted or oriented against the directors {where}; list its "
+                                f"corners {conn[e, :3].tolist()} counter-clockwise seen from the director")
+            # the corner triangle is fine: a midside node folds the element
+            off = [np.linalg.norm(X[e, 3 + k] - 0.5 * (X[e, a] + X[e, b])) / np.linalg.norm(X[e, b] - X[e, a])
+                   for k, (a, _, b) in enumerate(ELEMENT_EDGES)]
+            k = int(np.argmax(off))
+            raise MeshError(f"element {e} folds {where}: its midside node {conn[e, 3 + k]} lies {off[k]:.3g} edge "
+                            f"lengths from the middle of its edge; keep midside nodes near the middle of their "
+                            "edges")
 
 
 def _check_midside(x: np.ndarray, conn: np.ndarray) -> None:
@@ -245,23 +263,36 @@ def _check_midside(x: np.ndarray, conn: np.ndarray) -> None:
 
 
 def _check_topology(conn: np.ndarray) -> None:
+    """Non-manifold edges, neighbours that disagree on an edge's midside node or on the orientation.
+
+    Sort-based (no loop over the edges): the mesh check must stay cheap next to the assembly.
+    """
     triples = conn[:, ELEMENT_EDGES].reshape(-1, 3)
     keys = np.sort(triples[:, [0, 2]], axis=1)
-    uniq, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
-    inverse = inverse.ravel()
+    key = _row_keys(keys, int(conn.max()) + 1)
+    order = np.argsort(key, kind="stable")                  # edge occurrences grouped by edge
+    sk = key[order]
+    starts = np.flatnonzero(np.concatenate([[True], sk[1:] != sk[:-1]]))
+    counts = np.diff(np.append(starts, len(sk)))
+    uniq = keys[order[starts]]
     many = np.flatnonzero(counts > 2)
     if many.size:
-        owners = sorted(set((np.flatnonzero(inverse == many[0]) // 3).tolist()))
-        raise MeshError(f"edge {uniq[many[0]].tolist()} is shared by {counts[many[0]]} elements {owners} "
-                        "(non-manifold)")
-    for k in np.flatnonzero(counts == 2):
-        i, j = np.flatnonzero(inverse == k)
-        if triples[i, 1] != triples[j, 1]:
+        k = many[0]
+        owners = sorted(set((order[starts[k]:starts[k] + counts[k]] // 3).tolist()))
+        raise MeshError(f"edge {uniq[k].tolist()} is shared by {counts[k]} elements {owners} (non-manifold)")
+    two = np.flatnonzero(counts == 2)
+    i, j = order[starts[two]], order[starts[two] + 1]
+    bad_mid = triples[i, 1] != triples[j, 1]
+    bad_orient = triples[i, 0] == triples[j, 0]
+    bad = np.flatnonzero(bad_mid | bad_orient)
+    if bad.size:
+        b = bad[0]
+        k, i, j = two[b], i[b], j[b]
+        if bad_mid[b]:
             raise MeshError(f"elements {i // 3} and {j // 3} share the edge {uniq[k].tolist()} but not its "
                             f"midside node ({triples[i, 1]} vs {triples[j, 1]})")
-        if triples[i, 0] == triples[j, 0]:
-            raise MeshError(f"elements {i // 3} and {j // 3} have opposite orientations (they run along their "
-                            f"common edge {uniq[k].tolist()} in the same direction)")
+        raise MeshError(f"elements {i // 3} and {j // 3} have opposite orientations (they run along their "
+                        f"common edge {uniq[k].tolist()} in the same direction)")
 
 
 def _check_sets(mesh: Tri6Mesh) -> None:
@@ -273,9 +304,21 @@ def _check_sets(mesh: Tri6Mesh) -> None:
     if not mesh.edge_sets:
         return
     triples = mesh.elements[:, ELEMENT_EDGES].reshape(-1, 3)
-    known = {tuple(t) for t in triples} | {tuple(t[::-1]) for t in triples}
+    known = np.sort(_row_keys(np.vstack([triples, triples[:, ::-1]]), n))
     for name, edges in mesh.edge_sets.items():
-        for edge in edges:
-            if tuple(edge) not in known:
-                raise MeshError(f"edge set {name!r} has {edge.tolist()}, which is not an element edge "
-                                "(corner, midside, corner)")
+        k = _row_keys(edges, n)
+        missing = np.flatnonzero(known[np.minimum(np.searchsorted(known, k), len(known) - 1)] != k)
+        if missing.size:
+            raise MeshError(f"edge set {name!r} has {edges[missing[0]].tolist()}, which is not an element edge "
+                            "(corner, midside, corner)")
+
+
+def _row_keys(rows: np.ndarray, n: int) -> np.ndarray:
+    """One comparable scalar per row of node indices in [0, n) (for set membership and grouping)."""
+    rows = np.ascontiguousarray(rows, dtype=np.int64)
+    if float(n) ** rows.shape[1] < 2.0**62:
+        key = np.zeros(len(rows), dtype=np.int64)
+        for c in range(rows.shape[1]):
+            key = key * n + rows[:, c]
+        return key
+    return rows.view(np.dtype((np.void, rows.dtype.itemsize * rows.shape[1]))).ravel()
