@@ -122,6 +122,9 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
                 new_state, out = newton_solve(
                     state, lambda q: model.residual(q, trial), lambda q: model.residual_and_tangent(q, trial),
                     model.update, reference, settings, solver, stats,
+                    # modified Newton keeps the factorization of an earlier step until convergence slows;
+                    # a retry after a failure starts from a fresh tangent
+                    fresh_tangent=settings.policy == "full" or attempts > 1,
                     dof_scale=model.dof_scale, conjugate=model.conjugate)
             if out is None or not out.converged:
                 if out is None:

@@ -73,3 +73,15 @@ def test_arc_length_follows_snap_through_to_the_far_branch():
     roots = np.roots([0.5, -1.5, 1.0, -0.3])
     far = roots[np.isreal(roots)].real.max()
     assert abs(result.state[0] - far) < 1e-8
+
+
+def test_modified_newton_keeps_the_factorization_across_load_steps():
+    """A mildly nonlinear spring: the first step's factorization serves the later steps too."""
+    model = CubicSpring(load=0.01)
+    full = load_control(model, np.linspace(0.1, 1.0, 10), settings=NewtonSettings(rtol=1e-10), adaptive=False)
+    modified = load_control(model, np.linspace(0.1, 1.0, 10), adaptive=False,
+                            settings=NewtonSettings(rtol=1e-10, policy="modified", refresh_ratio=0.5))
+    assert full.converged and modified.converged
+    assert full.stats.factorizations >= 10
+    assert modified.stats.factorizations < 10 // 2
+    assert abs(model.f_int(modified.state[0]) - 0.01) < 1e-12
