@@ -42,6 +42,7 @@ def tip_force(f=(0, 0, 1.0)):
     (dict(poisson=float("nan")), "material poisson must be a finite number, got nan"),
     (dict(density=-1.0), "material density must be >= 0"),
     (dict(young="210e9"), "material young must be a finite number, got '210e9'"),
+    (dict(thickness=True), "material thickness must be a finite number, got True"),
 ])
 def test_bad_material_is_named(kwargs, match):
     args = dict(young=1.2e6, poisson=0.3, thickness=0.1) | kwargs

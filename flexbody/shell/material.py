@@ -30,7 +30,8 @@ class ShellMaterial:
     def __post_init__(self) -> None:
         for name in ("young", "poisson", "thickness", "density", "shear_correction"):
             value = getattr(self, name)
-            if not isinstance(value, (int, float, np.floating, np.integer)) or not math.isfinite(value):
+            if (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.floating, np.integer))
+                    or not math.isfinite(value)):
                 raise ValueError(f"material {name} must be a finite number, got {value!r}")
         if self.young <= 0:
             raise ValueError(f"material young (E) must be > 0, got {self.young!r}")
