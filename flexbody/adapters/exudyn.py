@@ -1,0 +1,1037 @@
+"""exudyn reference models of the built-in static scenes, and the side-by-side comparison.
+
+exudyn has no triangular or shear-deformable shell. The matching models used here are
+
+- the strips (``cantilever_end_moment``, ``cantilever_end_shear``): ``ObjectBeamGeometricallyExact``
+  (SE(3) beam, Euler-parameter nodes, the default), ``ObjectBeamGeometricallyExact2D`` and
+  ``ObjectANCFThinPlate`` (four-node Kirchhoff plate, ``exudyn.shells.ShellMesh``);
+- ``slit_annular_plate``, ``pullout_cylinder`` and ``hemisphere``: ``ObjectANCFThinPlate`` on a mapped
+  rectangle (``ShellMesh(surfaceMap=...)``), symmetry planes as coordinate constraints on the nodal
+  position and slope coordinates.
+
+The physics is read from the flexbody scene itself: material (E, nu, h), geometry (from the mesh nodes),
+total loads (from the scene's nodal loads) and the load factors of the analysis; tracked outputs are the
+scene's outputs, evaluated at the exudyn node nearest to the flexbody output node (the mean over nodes
+at equal distance, e.g. the two tip corners of a one-element-wide plate strip).
+
+Options of the exudyn model ride along in the scene parameters with the prefix ``exudyn_`` (and are removed
+before the flexbody scene is built): ``exudyn_model`` ("beam3d", "beam2d" or "plate" for the strips,
+"plate" otherwise), ``exudyn_nx``, ``exudyn_ny`` (element counts), ``exudyn_steps`` (uniform load steps,
+used where the flexbody scene runs arc-length), ``exudyn_rtol`` (exudyn's relative Newton tolerance).
+
+``ShellODE2`` puts our shell into an exudyn system as an ``ObjectGenericODE2`` (force and Jacobian user
+functions; with the lumped mass also for exudyn's implicit integrators), so that exudyn constraints and
+bodies can act with it; ``solve_scene_in_exudyn`` runs a static scene that way.
+
+Facts about exudyn that shape this module: its static solver raises ``exu.SolverError`` on failure; its
+Newton tolerance is relative to a residual that it re-bases after the first iteration
+(``adaptInitialResidual``), so beams need a tight tolerance (1e-10; 1e-8 left a 6e-3 error in the tip
+displacement of the strip after a 0.1 M_max step); the ANCF plate needs ``useReducedOrderIntegration=1``
+(speed, membrane locking); the hemisphere was reported to stall near a relative tolerance of 1e-6 (here
+the 20 x 20 model converged at 1e-6 as well) and runs at 1e-5.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import json
+import math
+import sys
+import time
+
+import numpy as np
+import scipy.sparse as sparse
+
+import exudyn as exu
+import exudyn.beams as beams
+import exudyn.itemInterface as eii
+import exudyn.shells as shells
+
+from flexbody.body import ShellState, update_state
+from flexbody.lie.so3 import tangent
+from flexbody.loads import NodalLoad
+from flexbody.scenes import build
+from flexbody.scenes.scene import Scene, compare_with_reference, run_scene
+
+#: exudyn models available for each built-in scene; the first is the default
+MODELS: dict[str, tuple[str, ...]] = {
+    "cantilever_end_moment": ("beam3d", "beam2d", "plate"),
+    "cantilever_end_shear": ("beam3d", "beam2d", "plate"),
+    "slit_annular_plate": ("plate",),
+    "pullout_cylinder": ("plate",),
+    "hemisphere": ("plate",),
+}
+
+#: exudyn relative Newton tolerance per model kind and scene (see the module docstring)
+_RTOL = {"beam3d": 1e-10, "beam2d": 1e-10, "plate": 1e-8}
+_RTOL_SCENE = {"slit_annular_plate": 1e-6, "pullout_cylinder": 1e-6, "hemisphere": 1e-5}
+
+_OPTION_PREFIX = "exudyn_"
+_OPTIONS = ("model", "nx", "ny", "steps", "rtol")
+
+
+# ----------------------------------------------------------------------------------------------------------
+# data
+# ----------------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class TrackedOutput:
+    """A scene output in exudyn: the mean displacement of ``nodes`` along ``direction`` (exudyn frame)."""
+
+    name: str
+    nodes: tuple[int, ...]
+    direction: tuple[float, float, float]
+    scale: float = 1.0
+
+
+@dataclass
+class ExudynModel:
+    """An assembled exudyn system that mirrors one flexbody scene.
+
+    Attributes
+    ----------
+    scene : scene name
+    kind : "beam3d", "beam2d" or "plate"
+    description : element type and mesh, for reports
+    mbs : the exudyn MainSystem (kept alive together with ``system_container``)
+    outputs : tracked outputs, named as in the flexbody scene
+    load_factors : load factors at which the static solver stops (the loads follow them piecewise linearly)
+    rtol : relative Newton tolerance of exudyn's static solver
+    elements : number of finite elements
+    build_time_s : wall time of building and assembling the system
+    sensors : exudyn sensor number of each exudyn node an output reads
+    """
+
+    scene: str
+    kind: str
+    description: str
+    system_container: object
+    mbs: object
+    outputs: list[TrackedOutput]
+    load_factors: np.ndarray
+    rtol: float
+    elements: int
+    build_time_s: float = 0.0
+    sensors: dict[int, int] = field(default_factory=dict)
+
+    @property
+    def coordinates(self) -> int:
+        return int(self.mbs.systemData.ODE2Size())
+
+    @property
+    def constraints(self) -> int:
+        return int(self.mbs.systemData.AEsize())
+
+    @property
+    def dofs(self) -> int:
+        """Coordinates minus algebraic constraints (the free DoFs, comparable to flexbody's n_dof)."""
+        return self.coordinates - self.constraints
+
+
+@dataclass
+class ExudynRun:
+    """Result of a static exudyn run: the history of the tracked outputs per converged load step."""
+
+    model: ExudynModel
+    history: dict[str, list[float]]
+    converged: bool
+    message: str
+    newton_iterations: int
+    wall_time_s: float
+    cpu_time_s: float
+    errors: list[dict] = field(default_factory=list)
+
+    @property
+    def max_rel_error(self) -> float:
+        return max((e["rel_error"] for e in self.errors), default=float("nan"))
+
+    def as_dict(self) -> dict:
+        m = self.model
+        lam = self.history["load_factor"]
+        return {
+            "model": m.description, "kind": m.kind, "dofs": m.dofs, "coordinates": m.coordinates,
+            "constraints": m.constraints, "elements": m.elements, "steps": len(lam),
+            "newton_iterations": self.newton_iterations, "newton_rtol": m.rtol,
+            "converged": self.converged, "message": self.message,
+            "load_factor": lam[-1] if lam else 0.0,
+            "build_time_s": m.build_time_s, "wall_time_s": self.wall_time_s, "cpu_time_s": self.cpu_time_s,
+            "outputs": {k: v[-1] for k, v in self.history.items() if k != "load_factor" and v},
+            "errors": self.errors, "max_rel_error": self.max_rel_error, "history": self.history,
+        }
+
+
+# ----------------------------------------------------------------------------------------------------------
+# reading the physics from the flexbody scene
+# ----------------------------------------------------------------------------------------------------------
+
+def split_options(params: dict | None) -> tuple[dict, dict]:
+    """Split parameters into (flexbody scene parameters, exudyn options without the ``exudyn_`` prefix)."""
+    scene_params, options = {}, {}
+    for key, value in (params or {}).items():
+        if key.startswith(_OPTION_PREFIX):
+            name = key[len(_OPTION_PREFIX):]
+            if name not in _OPTIONS:
+                raise KeyError(f"unknown exudyn option {key!r}; options: "
+                               + ", ".join(_OPTION_PREFIX + o for o in _OPTIONS))
+            options[name] = value
+        else:
+            scene_params[key] = value
+    return scene_params, options
+
+
+def _total_load(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """Sum of all dead nodal forces and moments of the scene (at load factor 1)."""
+    force, moment = np.zeros(3), np.zeros(3)
+    for load in scene.model.loads:
+        if not isinstance(load, NodalLoad) or load.follower:
+            raise ValueError(f"scene {scene.name!r}: only dead nodal loads have an exudyn counterpart")
+        force += len(load.nodes) * np.asarray(load.force, float)
+        moment += len(load.nodes) * np.asarray(load.moment, float)
+    return force, moment
+
+
+def _point_loads(scene: Scene) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(reference position, force) of every loaded node of a scene with point forces only."""
+    nodes = scene.model.body.mesh.nodes
+    out = []
+    for load in scene.model.loads:
+        if not isinstance(load, NodalLoad) or load.follower:
+            raise ValueError(f"scene {scene.name!r}: only dead nodal loads have an exudyn counterpart")
+        if np.any(np.asarray(load.moment) != 0):
+            raise ValueError(f"scene {scene.name!r}: point moments are not mapped to the ANCF plate")
+        out += [(nodes[i], np.asarray(load.force, float)) for i in load.nodes]
+    return out
+
+
+def _load_factors(scene: Scene, steps: int | None) -> np.ndarray:
+    """The flexbody load factors (load control), or uniform steps plus the reference table (arc-length)."""
+    a = scene.analysis
+    if a.method == "load_control" and steps is None:
+        lf = np.asarray(a.load_factors, float)
+    else:
+        n = int(steps) if steps is not None else 40
+        if n < 1:
+            raise ValueError(f"exudyn_steps must be >= 1, got {steps!r}")
+        lf = np.linspace(0, max(a.load_factors), n + 1)[1:]
+        if scene.reference is not None:
+            ref = np.asarray(scene.reference.load_factors, float)
+            lf = np.union1d(lf, ref[(ref > 0) & (ref <= lf[-1])])
+    lf = np.unique(np.round(lf, 12))
+    return lf[lf > 0]
+
+
+def _material(scene: Scene) -> tuple[float, float, float, float, float]:
+    m = scene.model.body.material
+    return m.young, m.poisson, m.thickness, (m.density or 1.0), m.shear_correction
+
+
+# ----------------------------------------------------------------------------------------------------------
+# exudyn building blocks
+# ----------------------------------------------------------------------------------------------------------
+
+def _new_system():
+    sc = exu.SystemContainer()
+    return sc, sc.AddSystem()
+
+
+def _nearest(positions: np.ndarray, point: np.ndarray, size: float) -> np.ndarray:
+    """Indices of the positions nearest to ``point`` (all those within 1e-9 size of the minimum)."""
+    d = np.linalg.norm(positions - point, axis=1)
+    return np.flatnonzero(d <= d.min() + 1e-9 * size)
+
+
+def _outputs_at(scene: Scene, node_numbers: list[int], positions: np.ndarray,
+                rotation: np.ndarray | None = None) -> list[TrackedOutput]:
+    """Map each scene output to the exudyn node(s) nearest to its flexbody node.
+
+    positions : reference positions of the exudyn nodes in flexbody coordinates
+    rotation : maps flexbody vectors to exudyn vectors (the planar beam lives in the exudyn x-y plane)
+    """
+    mesh = scene.model.body.mesh
+    size = float(np.ptp(mesh.nodes, axis=0).max())
+    rot = np.eye(3) if rotation is None else rotation
+    outs = []
+    for out in scene.outputs:
+        idx = _nearest(positions, mesh.nodes[out.node], size)
+        direction = rot @ np.asarray(out.direction, float)
+        outs.append(TrackedOutput(out.name, tuple(int(node_numbers[i]) for i in idx),
+                                  tuple(float(c) for c in direction), out.scale))
+    return outs
+
+
+def _constrain_to_ground(mbs, node: int, coordinates) -> None:
+    """Fix the listed coordinates of a node at their reference values (CoordinateConstraint to ground)."""
+    shells.AddNodeConstraints(mbs, node, dofs=sorted(set(int(c) for c in coordinates)))
+
+
+def _point_force(mbs, node: int, force) -> None:
+    marker = mbs.AddMarker(eii.MarkerNodePosition(nodeNumber=node))
+    mbs.AddLoad(eii.Force(markerNumber=marker, loadVector=[float(f) for f in force]))
+
+
+def _follow_load_factors(mbs, load_factors: np.ndarray) -> None:
+    """Let every load follow the load factors: pseudo-time k/N of the static solver -> load_factors[k-1].
+
+    The static solver then runs with ``useLoadFactor = False`` and N = len(load_factors) steps, so that it
+    stops exactly at the flexbody load factors (also at non-uniform ones such as the reference table's).
+    """
+    t_grid = np.linspace(0.0, 1.0, len(load_factors) + 1)
+    lam = np.concatenate([[0.0], load_factors])
+
+    def scaled(mbs_, t, load):
+        return (float(np.interp(t, t_grid, lam)) * np.asarray(load)).tolist()
+
+    for i in range(mbs.systemData.NumberOfLoads()):
+        mbs.SetLoadParameter(i, "loadVectorUserFunction", scaled)
+
+
+# ----------------------------------------------------------------------------------------------------------
+# strips: geometrically exact beams and the ANCF plate
+# ----------------------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Strip:
+    length: float
+    width: float
+    young: float
+    poisson: float
+    thickness: float
+    density: float
+    shear_correction: float
+    force: np.ndarray
+    moment: np.ndarray
+
+    @property
+    def bending_stiffness(self) -> float:
+        """D b = E b h^3 / (12 (1 - nu^2)): the strip bends as a plate strip (equal to E I for nu = 0)."""
+        return self.young * self.width * self.thickness**3 / (12 * (1 - self.poisson**2))
+
+    @property
+    def axial_stiffness(self) -> float:
+        return self.young * self.width * self.thickness / (1 - self.poisson**2)
+
+    @property
+    def shear_stiffness(self) -> float:
+        g = self.young / (2 * (1 + self.poisson))
+        return self.shear_correction * g * self.width * self.thickness
+
+
+def _strip(scene: Scene) -> _Strip:
+    x = scene.model.body.mesh.nodes
+    if np.ptp(x[:, 2]) > 0 or x[:, 0].min() != 0 or x[:, 1].min() != 0:
+        raise ValueError(f"scene {scene.name!r} is not a flat strip [0, L] x [0, b] in z = 0")
+    force, moment = _total_load(scene)
+    E, nu, h, rho, k = _material(scene)
+    return _Strip(float(x[:, 0].max()), float(x[:, 1].max()), E, nu, h, rho, k, force, moment)
+
+
+# a rotation taking the strip's bending plane x-z to exudyn's 2D plane x-y: e_x -> e_x, e_y -> -e_z, e_z -> e_y
+_XZ_TO_XY = np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])
+
+
+def beam2d_strip(scene: Scene, n_elements: int) -> tuple:
+    """The strip as ``ObjectBeamGeometricallyExact2D`` elements (x-z plane mapped to exudyn's x-y plane)."""
+    s = _strip(scene)
+    sc, mbs = _new_system()
+    area = s.width * s.thickness
+    template = eii.ObjectBeamGeometricallyExact2D(
+        nodeNumbers=[0, 0], massPerLength=s.density * area, crossSectionInertia=s.density * area * s.thickness**2 / 12,
+        bendingStiffness=s.bending_stiffness, axialStiffness=s.axial_stiffness, shearStiffness=s.shear_stiffness)
+    beam = beams.GenerateBeamElementsAlongLine(mbs, [0.0, 0.0, 0.0], [s.length, 0.0, 0.0], n_elements, template,
+                                               groundConstraintsStart=[1, 1, 1])
+    tip = beam["nodes"][-1]
+    marker = mbs.AddMarker(eii.MarkerNodeRigid(nodeNumber=tip))
+    f, m = _XZ_TO_XY @ s.force, _XZ_TO_XY @ s.moment
+    if abs(f[2]) > 0 or abs(m[0]) + abs(m[1]) > 0:
+        raise ValueError(f"scene {scene.name!r}: the load leaves the bending plane; use exudyn_model=beam3d")
+    if np.any(f != 0):
+        mbs.AddLoad(eii.Force(markerNumber=marker, loadVector=f.tolist()))
+    if np.any(m != 0):
+        mbs.AddLoad(eii.Torque(markerNumber=marker, loadVector=m.tolist()))
+    nodes = list(beam["nodes"])
+    positions = np.array([[p[0], s.width / 2, 0.0] for p in beam["nodePositions"]])
+    outputs = _outputs_at(scene, nodes, positions, _XZ_TO_XY)
+    return sc, mbs, outputs, f"ObjectBeamGeometricallyExact2D, {n_elements} elements", n_elements
+
+
+def beam3d_strip(scene: Scene, n_elements: int) -> tuple:
+    """The strip as ``ObjectBeamGeometricallyExact`` (SE(3) beam) elements on Euler-parameter nodes.
+
+    Section axes: x along the strip, y across the width, z through the thickness; the centre line is
+    y = b/2. Torsion: G b h^3 / 3 (thin rectangle).
+    """
+    s = _strip(scene)
+    sc, mbs = _new_system()
+    g = s.young / (2 * (1 + s.poisson))
+    b, h = s.width, s.thickness
+    section = exu.BeamSection()
+    section.stiffnessMatrix = np.diag([s.axial_stiffness, s.shear_stiffness, s.shear_stiffness, g * b * h**3 / 3,
+                                       s.bending_stiffness, s.young * h * b**3 / 12])
+    section.massPerLength = s.density * b * h
+    section.inertia = s.density * np.diag([b * h * (b**2 + h**2) / 12, b * h**3 / 12, h * b**3 / 12])
+    xs = np.linspace(0.0, s.length, n_elements + 1)
+    ep0 = [1.0, 0.0, 0.0, 0.0]
+    nodes = [mbs.AddNode(eii.NodeRigidBodyEP(referenceCoordinates=[x, b / 2, 0.0] + ep0)) for x in xs]
+    for n0, n1 in zip(nodes[:-1], nodes[1:]):
+        mbs.AddObject(eii.ObjectBeamGeometricallyExact(nodeNumbers=[n0, n1], length=s.length / n_elements,
+                                                       sectionData=section))
+    ground = mbs.AddObject(eii.ObjectGround(referencePosition=[0.0, b / 2, 0.0]))
+    mbs.AddObject(eii.GenericJoint(markerNumbers=[mbs.AddMarker(eii.MarkerBodyRigid(bodyNumber=ground)),
+                                                  mbs.AddMarker(eii.MarkerNodeRigid(nodeNumber=nodes[0]))]))
+    marker = mbs.AddMarker(eii.MarkerNodeRigid(nodeNumber=nodes[-1]))
+    if np.any(s.force != 0):
+        mbs.AddLoad(eii.Force(markerNumber=marker, loadVector=s.force.tolist()))
+    if np.any(s.moment != 0):
+        mbs.AddLoad(eii.Torque(markerNumber=marker, loadVector=s.moment.tolist()))
+    positions = np.column_stack([xs, np.full_like(xs, b / 2), np.zeros_like(xs)])
+    outputs = _outputs_at(scene, nodes, positions)
+    description = f"ObjectBeamGeometricallyExact (SE(3), Euler parameters), {n_elements} elements"
+    return sc, mbs, outputs, description, n_elements
+
+
+def _plate_mesh(mbs, scene: Scene, vertices, nx: int, ny: int, surface_map=None):
+    E, nu, h, rho, _ = _material(scene)
+    mesh = shells.ShellMesh(vertices=vertices, numberOfElementsX=nx, numberOfElementsY=ny, youngsModulus=E,
+                            poissonsRatio=nu, density=rho, thickness=h, surfaceMap=surface_map)
+    mesh.CreateANCFThinPlateElements(mbs, useReducedOrderIntegration=1)
+    return mesh
+
+
+def _plate_outputs(scene: Scene, mesh) -> list[TrackedOutput]:
+    return _outputs_at(scene, mesh.nodeNumbers, np.array(mesh.nodeReferencePositions))
+
+
+def plate_strip(scene: Scene, nx: int, ny: int) -> tuple:
+    """The strip as ANCF thin plates (nx x ny), clamped at x = 0 (all nine nodal coordinates).
+
+    The tip moment is applied as nodal torques (trapezoidal rule, ``shells.ApplyEdgeLoad``), the tip force
+    as a consistent line load (``distributed=True``).
+    """
+    s = _strip(scene)
+    sc, mbs = _new_system()
+    L, b = s.length, s.width
+    mesh = _plate_mesh(mbs, scene, [[0, 0, 0], [L, 0, 0], [L, b, 0], [0, b, 0]], nx, ny)
+    for node in mesh.boundaryNodeNumbers["left"]:
+        _constrain_to_ground(mbs, node, range(9))
+    if np.any(s.force != 0):
+        shells.ApplyEdgeLoad(mbs, mesh, "right", loadVector=s.force.tolist(), distributed=True)
+    if np.any(s.moment != 0):
+        shells.ApplyEdgeLoad(mbs, mesh, "right", torqueVector=s.moment.tolist())
+    return sc, mbs, _plate_outputs(scene, mesh), f"ObjectANCFThinPlate, {nx} x {ny} elements", nx * ny
+
+
+# ----------------------------------------------------------------------------------------------------------
+# curved and annular plates: the ANCF plate on mapped rectangles
+# ----------------------------------------------------------------------------------------------------------
+
+# NodePointSlope12 coordinates: 0-2 position, 3-5 slope x (first parametric direction), 6-8 slope y
+_SLOPE = {"x": 3, "y": 6}
+
+
+def symmetry_coordinates(axis: int, along: str) -> list[int]:
+    """ANCF node coordinates fixed by a symmetry plane with normal along the global ``axis`` (0, 1, 2).
+
+    ``along`` is the parametric direction ("x" or "y") whose slope lies in the plane (the edge direction);
+    the other slope crosses the plane. Mirror symmetry r(-s) = M r(s) gives: position . n = 0, the in-plane
+    slope has no normal component, the crossing slope is parallel to n.
+    """
+    cross = "y" if along == "x" else "x"
+    others = [k for k in range(3) if k != axis]
+    return [axis, _SLOPE[along] + axis] + [_SLOPE[cross] + k for k in others]
+
+
+def _apply_symmetry(mbs, mesh, planes: list[tuple[str, int]]) -> None:
+    """Symmetry planes on mesh sides: [(side, normal axis)], the coordinates of shared corners merged."""
+    along = {"left": "y", "right": "y", "bottom": "x", "top": "x"}
+    fixed: dict[int, set[int]] = {}
+    for side, axis in planes:
+        for node in mesh.boundaryNodeNumbers[side]:
+            fixed.setdefault(node, set()).update(symmetry_coordinates(axis, along[side]))
+    for node, coords in fixed.items():
+        _constrain_to_ground(mbs, node, coords)
+
+
+def _apply_point_loads(mbs, scene: Scene, mesh) -> None:
+    positions = np.array(mesh.nodeReferencePositions)
+    size = float(np.ptp(positions, axis=0).max())
+    for x, force in _point_loads(scene):
+        idx = _nearest(positions, x, size)
+        if np.linalg.norm(positions[idx[0]] - x) > 1e-6 * size:
+            raise ValueError(f"scene {scene.name!r}: no ANCF node at the load point {x}; choose another mesh")
+        _point_force(mbs, mesh.nodeNumbers[idx[0]], force)
+
+
+def _sym():
+    return exu.symbolic
+
+
+def slit_annular_plate_model(scene: Scene, nx: int, ny: int) -> tuple:
+    """Slit annulus as ANCF plates on (r, theta) in [Ri, Ro] x [0, 2 pi]: nx radial x ny circumferential.
+
+    Lip theta = 0 clamped (all nine nodal coordinates); the scene's total line force on the lip
+    theta = 2 pi as a consistent line load.
+    """
+    x = scene.model.body.mesh.nodes
+    r = np.linalg.norm(x[:, :2], axis=1)
+    ri, ro = float(r.min()), float(r.max())
+    force, _ = _total_load(scene)
+    sc, mbs = _new_system()
+    sym = _sym()
+
+    def annulus(rr, t):
+        return [rr * sym.cos(t), rr * sym.sin(t), 0.0]
+
+    mesh = _plate_mesh(mbs, scene, [[ri, 0, 0], [ro, 0, 0], [ro, 2 * math.pi, 0], [ri, 2 * math.pi, 0]], nx, ny,
+                       annulus)
+    for node in mesh.boundaryNodeNumbers["bottom"]:
+        _constrain_to_ground(mbs, node, range(9))
+    shells.ApplyEdgeLoad(mbs, mesh, "top", loadVector=force.tolist(), distributed=True)
+    # the lips coincide: pick the output nodes on the loaded lip explicitly
+    lip = mesh.boundaryNodeNumbers["top"]
+    lip_positions = np.array([mesh.nodeReferencePositions[mesh.nodeNumbers.index(n)] for n in lip])
+    outputs = _outputs_at(scene, lip, lip_positions)
+    return sc, mbs, outputs, f"ObjectANCFThinPlate, {nx} x {ny} elements (radial x circumferential)", nx * ny
+
+
+def pullout_cylinder_model(scene: Scene, nx: int, ny: int) -> tuple:
+    """Octant of the pulled cylinder as ANCF plates on (angle, z) in [0, pi/2] x [0, L/2].
+
+    Symmetry planes y = 0 (angle 0), x = 0 (angle pi/2) and z = 0 (mid-length); free edge z = L/2.
+    """
+    x = scene.model.body.mesh.nodes
+    radius = float(np.linalg.norm(x[:, :2], axis=1).max())
+    half_length = float(x[:, 2].max())
+    sc, mbs = _new_system()
+    sym = _sym()
+
+    def cylinder(a, z):
+        return [radius * sym.cos(a), radius * sym.sin(a), z]
+
+    mesh = _plate_mesh(mbs, scene, [[0, 0, 0], [math.pi / 2, 0, 0], [math.pi / 2, half_length, 0],
+                                    [0, half_length, 0]], nx, ny, cylinder)
+    _apply_symmetry(mbs, mesh, [("left", 1), ("right", 0), ("bottom", 2)])
+    _apply_point_loads(mbs, scene, mesh)
+    return (sc, mbs, _plate_outputs(scene, mesh),
+            f"ObjectANCFThinPlate, {nx} x {ny} elements (circumferential x axial)", nx * ny)
+
+
+def hemisphere_model(scene: Scene, nx: int, ny: int) -> tuple:
+    """Quarter hemisphere with a polar hole as ANCF plates on (azimuth, polar angle).
+
+    Symmetry planes y = 0 and x = 0; the z translation fixed at the hole node on y = 0 (as in the scene).
+    """
+    x = scene.model.body.mesh.nodes
+    radius = float(np.linalg.norm(x, axis=1).max())
+    hole = math.acos(min(1.0, float(x[:, 2].max()) / radius))
+    equator = math.acos(max(-1.0, float(x[:, 2].min()) / radius))
+    sc, mbs = _new_system()
+    sym = _sym()
+
+    def sphere(a, p):
+        return [radius * sym.sin(p) * sym.cos(a), radius * sym.sin(p) * sym.sin(a), radius * sym.cos(p)]
+
+    mesh = _plate_mesh(mbs, scene, [[0, hole, 0], [math.pi / 2, hole, 0], [math.pi / 2, equator, 0],
+                                    [0, equator, 0]], nx, ny, sphere)
+    _apply_symmetry(mbs, mesh, [("left", 1), ("right", 0)])
+    _constrain_to_ground(mbs, mesh.boundaryNodeNumbers["bottom"][0], [2])
+    _apply_point_loads(mbs, scene, mesh)
+    return (sc, mbs, _plate_outputs(scene, mesh),
+            f"ObjectANCFThinPlate, {nx} x {ny} elements (azimuthal x meridional)", nx * ny)
+
+
+# ----------------------------------------------------------------------------------------------------------
+# building and running
+# ----------------------------------------------------------------------------------------------------------
+
+def _default_mesh(scene: Scene, kind: str) -> tuple[int, int]:
+    """Element counts: beams get one element per flexbody node spacing (2 nx), plates one quad per cell."""
+    p = scene.parameters
+    if scene.name in ("cantilever_end_moment", "cantilever_end_shear"):
+        return (2 * p["nx"], 1) if kind.startswith("beam") else (p["nx"], p["ny"])
+    keys = {"slit_annular_plate": ("n_radial", "n_circ"), "pullout_cylinder": ("n_circ", "n_axial"),
+            "hemisphere": ("n_circ", "n_meridian")}[scene.name]
+    return p[keys[0]], p[keys[1]]
+
+
+def model_kind(scene_name: str, options: dict) -> str:
+    """The exudyn model kind for a scene and options; raises KeyError/ValueError for unsupported ones."""
+    if scene_name not in MODELS:
+        raise KeyError(f"no exudyn model for scene {scene_name!r}; exudyn models exist for: {', '.join(MODELS)}")
+    kind = options.get("model", MODELS[scene_name][0])
+    if kind not in MODELS[scene_name]:
+        raise ValueError(f"exudyn_model for {scene_name!r} must be one of {MODELS[scene_name]}, got {kind!r}")
+    return kind
+
+
+def build_model(scene: Scene, options: dict | None = None) -> ExudynModel:
+    """Build and assemble the exudyn reference model of a flexbody scene.
+
+    Parameters
+    ----------
+    scene : a built-in flexbody scene (``flexbody.scenes.build``)
+    options : exudyn options without the prefix: model, nx, ny, steps, rtol (see the module docstring)
+    """
+    options = dict(options or {})
+    kind = model_kind(scene.name, options)
+    nx0, ny0 = _default_mesh(scene, kind)
+    nx, ny = int(options.get("nx", nx0)), int(options.get("ny", ny0))
+    if nx < 1 or ny < 1:
+        raise ValueError(f"exudyn_nx and exudyn_ny must be >= 1, got {nx} and {ny}")
+    rtol = float(options.get("rtol", _RTOL_SCENE.get(scene.name, _RTOL[kind])))
+    load_factors = _load_factors(scene, options.get("steps"))
+    t0 = time.perf_counter()
+    if kind == "beam2d":
+        parts = beam2d_strip(scene, nx)
+    elif kind == "beam3d":
+        parts = beam3d_strip(scene, nx)
+    elif scene.name.startswith("cantilever"):
+        parts = plate_strip(scene, nx, ny)
+    else:
+        builder = {"slit_annular_plate": slit_annular_plate_model, "pullout_cylinder": pullout_cylinder_model,
+                   "hemisphere": hemisphere_model}[scene.name]
+        parts = builder(scene, nx, ny)
+    sc, mbs, outputs, description, elements = parts
+    _follow_load_factors(mbs, load_factors)
+    sensors = _add_sensors(mbs, outputs)
+    mbs.Assemble()
+    return ExudynModel(scene.name, kind, description, sc, mbs, outputs, load_factors, rtol, elements,
+                       time.perf_counter() - t0, sensors)
+
+
+def _settings(model: ExudynModel):
+    s = exu.SimulationSettings()
+    st = s.staticSolver
+    st.numberOfLoadSteps = len(model.load_factors)
+    st.useLoadFactor = False          # the loads follow model.load_factors through their user functions
+    st.adaptiveStep = True
+    st.verboseMode = 0
+    st.newton.relativeTolerance = model.rtol
+    s.solution.file.write = False
+    s.solution.sensors.writePeriod = 1e-12  # every converged load step
+    s.linearSolver.solverType = exu.LinearSolverType.EigenSparse
+    return s
+
+
+def _add_sensors(mbs, outputs: list[TrackedOutput]) -> dict[int, int]:
+    nodes = sorted({n for out in outputs for n in out.nodes})
+    kind = exu.OutputVariableType.Displacement
+    return {n: mbs.AddSensor(eii.SensorNode(nodeNumber=n, storeInternal=True, outputVariableType=kind))
+            for n in nodes}
+
+
+def _history(model: ExudynModel) -> dict[str, list[float]]:
+    data = {n: np.asarray(model.mbs.GetSensorStoredData(s), float).reshape(-1, 4)
+            for n, s in model.sensors.items()}
+    t = next(iter(data.values()))[:, 0]
+    keep = t > 1e-14                                 # drop the initial (unloaded) record
+    t_grid = np.linspace(0.0, 1.0, len(model.load_factors) + 1)
+    lam = np.interp(t[keep], t_grid, np.concatenate([[0.0], model.load_factors]))
+    history = {"load_factor": [float(v) for v in lam]}
+    for out in model.outputs:
+        u = np.mean([data[n][keep, 1:4] for n in out.nodes], axis=0)
+        history[out.name] = [float(v) for v in out.scale * (u @ np.asarray(out.direction))]
+    return history
+
+
+def solve(model: ExudynModel, reference=None) -> ExudynRun:
+    """Run exudyn's static solver through the model's load factors; track the outputs per converged step.
+
+    A failing solver (``exu.SolverError``) gives ``converged = False`` and the history up to the last
+    converged step. ``reference`` (a flexbody ``Reference``) adds the errors against it.
+    """
+    settings = _settings(model)
+    converged, message = True, "completed"
+    print_to_console = exu.config.printToConsole
+    exu.config.printToConsole = False
+    t0, c0 = time.perf_counter(), time.process_time()
+    try:
+        model.mbs.SolveStatic(settings, storeSolver=True, showHints=False)
+    except exu.SolverError as exc:
+        converged, message = False, f"exudyn SolverError: {str(exc).splitlines()[0]}"
+    finally:
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        exu.config.printToConsole = print_to_console
+    solver = model.mbs.sys.get("staticSolver")
+    iterations = int(solver.it.newtonStepsCount) if solver is not None else 0
+    history = _history(model)
+    if converged and (not history["load_factor"] or abs(history["load_factor"][-1] - model.load_factors[-1]) > 1e-9):
+        converged, message = False, "exudyn stopped before the last load factor"
+    errors = compare_with_reference(history, reference) if reference is not None else []
+    return ExudynRun(model, history, converged, message, iterations, wall, cpu, errors)
+
+
+def run_reference(scene_name: str, params: dict | None = None) -> ExudynRun:
+    """Build the flexbody scene (for its physics) and run its exudyn reference model."""
+    scene_params, options = split_options(params)
+    scene = build(scene_name, **scene_params)
+    return solve(build_model(scene, options), scene.reference)
+
+
+# ----------------------------------------------------------------------------------------------------------
+# comparison
+# ----------------------------------------------------------------------------------------------------------
+
+def _flexbody_dict(scene: Scene, summary, build_time: float, cpu_time: float) -> dict:
+    d = summary.as_dict()
+    return {
+        "model": f"flexbody six-node SE(3) shell ({'MITC6' if scene.model.body.tying else 'no tying'}), "
+                 f"{summary.elements} triangles",
+        "dofs": d["dofs"], "elements": d["elements"], "steps": d["steps"],
+        "newton_iterations": d["newton_iterations"], "converged": d["converged"], "message": d["message"],
+        "load_factor": d["load_factor"], "build_time_s": build_time, "wall_time_s": d["wall_time_s"],
+        "cpu_time_s": cpu_time,
+        "outputs": d["outputs"], "errors": d["errors"], "max_rel_error": d["max_rel_error"],
+        "history": {k: [float(x) for x in v] for k, v in summary.history.items()},
+    }
+
+
+def _max_error(errors: list[dict], name: str) -> float | None:
+    vals = [e["rel_error"] for e in errors if e["quantity"] == name]
+    return max(vals) if vals else None
+
+
+def _output_rows(scene: Scene, fb: dict, ex: dict) -> list[dict]:
+    """One row per output; rel_difference is |difference| / the largest |value| either code reached."""
+    rows = []
+    for out in scene.outputs:
+        a, b = fb["outputs"].get(out.name), ex["outputs"].get(out.name)
+        ref = None
+        if scene.reference is not None and out.name in scene.reference.values:
+            ref = float(np.asarray(scene.reference.values[out.name])[-1])
+        diff = None if a is None or b is None else b - a
+        scale = max([abs(v) for v in fb["history"][out.name] + ex["history"][out.name]], default=0.0) or 1.0
+        rows.append({"name": out.name, "flexbody": a, "exudyn": b, "difference": diff,
+                     "rel_difference": None if diff is None else abs(diff) / scale, "reference": ref,
+                     "flexbody_ref_error": _max_error(fb["errors"], out.name),
+                     "exudyn_ref_error": _max_error(ex["errors"], out.name)})
+    return rows
+
+
+def compare(scene_name: str, params: dict | None = None) -> dict:
+    """Run a built-in scene in flexbody and its exudyn reference model; report both side by side.
+
+    Parameters
+    ----------
+    scene_name : a scene of ``MODELS``
+    params : flexbody scene parameters, plus exudyn options prefixed ``exudyn_`` (module docstring)
+
+    Returns
+    -------
+    dict with keys
+        "scene", "parameters" (flexbody), "exudyn_options";
+        "flexbody" and "exudyn": model, dofs, elements, steps, newton_iterations, converged, message,
+        load_factor (last reached), build_time_s, wall_time_s, cpu_time_s (process CPU time of the solve,
+        robust on a loaded machine), outputs (final values), errors (per
+        tabulated load level, ``compare_with_reference``), max_rel_error, history (load_factor and every
+        output per converged step); exudyn adds kind, coordinates, constraints, newton_rtol;
+        "outputs": one row per tracked output: name, flexbody, exudyn, difference (exudyn - flexbody),
+        rel_difference (|difference| / the largest |value| of that output in either history), reference
+        (final tabulated value or None), flexbody_ref_error and exudyn_ref_error (max relative error
+        over the table, or None);
+        "reference_source", "wall_time_ratio" and "cpu_time_ratio" (exudyn / flexbody, solve only),
+        "ok" (both converged).
+    """
+    scene_params, options = split_options(params)
+    model_kind(scene_name, options)                # fail before the (possibly long) flexbody build
+    t0 = time.perf_counter()
+    scene = build(scene_name, **scene_params)
+    fb_build = time.perf_counter() - t0
+    model = build_model(scene, options)            # before the flexbody run: reads the unloaded scene
+    c0 = time.process_time()
+    summary = run_scene(scene)
+    fb = _flexbody_dict(scene, summary, fb_build, time.process_time() - c0)
+    ex = solve(model, scene.reference).as_dict()
+    ratio = ex["wall_time_s"] / fb["wall_time_s"] if fb["wall_time_s"] > 0 else None
+    cpu_ratio = ex["cpu_time_s"] / fb["cpu_time_s"] if fb["cpu_time_s"] > 0 else None
+    return {
+        "scene": scene_name, "parameters": dict(scene.parameters), "exudyn_options": options,
+        "flexbody": fb, "exudyn": ex, "outputs": _output_rows(scene, fb, ex),
+        "reference_source": scene.reference.source if scene.reference is not None else None,
+        "wall_time_ratio": ratio, "cpu_time_ratio": cpu_ratio, "ok": bool(fb["converged"] and ex["converged"]),
+    }
+
+
+def _fmt(value, spec: str = ".5g") -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "nan"
+    return format(value, spec)
+
+
+def table_lines(result: dict) -> list[str]:
+    """The printed comparison table (the same content as the JSON file)."""
+    fb, ex = result["flexbody"], result["exudyn"]
+    lines = [f"scene            {result['scene']}",
+             f"parameters       {result['parameters']}" + (f"  exudyn {result['exudyn_options']}"
+                                                            if result["exudyn_options"] else ""),
+             f"flexbody         {fb['model']}",
+             f"exudyn           {ex['model']}",
+             ""]
+    w = 14
+    lines.append(f"{'':22}{'flexbody':>{w}}{'exudyn':>{w}}")
+    for label, key, spec in [("DoFs", "dofs", "d"), ("load steps", "steps", "d"),
+                             ("Newton iterations", "newton_iterations", "d"), ("build time [s]", "build_time_s", ".3f"),
+                             ("solve time [s]", "wall_time_s", ".3f"), ("solve CPU time [s]", "cpu_time_s", ".3f"),
+                             ("last load factor", "load_factor", ".4g"),
+                             ("max ref. error", "max_rel_error", ".2e")]:
+        lines.append(f"{label:22}{_fmt(fb[key], spec):>{w}}{_fmt(ex[key], spec):>{w}}")
+    lines.append(f"{'converged':22}{str(fb['converged']):>{w}}{str(ex['converged']):>{w}}")
+    lines.append("")
+    lines.append(f"{'output':16}{'flexbody':>12}{'exudyn':>12}{'difference':>12}{'rel.diff':>10}"
+                 f"{'reference':>11}{'err flexbody':>14}{'err exudyn':>12}")
+    for r in result["outputs"]:
+        lines.append(f"{r['name']:16}{_fmt(r['flexbody']):>12}{_fmt(r['exudyn']):>12}{_fmt(r['difference'], '.3e'):>12}"
+                     f"{_fmt(r['rel_difference'], '.2e'):>10}{_fmt(r['reference']):>11}"
+                     f"{_fmt(r['flexbody_ref_error'], '.2e'):>14}{_fmt(r['exudyn_ref_error'], '.2e'):>12}")
+    if result["reference_source"]:
+        lines.append(f"reference: {result['reference_source']} (errors: max over the table, relative to max |ref|)")
+    if not fb["converged"]:
+        lines.append(f"flexbody: {fb['message']}")
+    if not ex["converged"]:
+        lines.append(f"exudyn: {ex['message']}")
+    return lines
+
+
+def _json_ready(value):
+    if isinstance(value, dict):
+        return {str(k): _json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_ready(v) for v in value]
+    if isinstance(value, (np.floating, float)):
+        v = float(value)
+        return v if math.isfinite(v) else None
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value
+
+
+def compare_cli(scene_name: str, params: dict, json_path: str | None, quiet: bool) -> int:
+    """``flexbody compare SCENE --with exudyn``: print the table, write the JSON; 0 on success, 2 on failure.
+
+    Failure: an unknown scene or option, a model that cannot be built, an unwritable JSON file, or a run
+    that did not converge (the table and JSON are still written then). The failure is one line on stderr.
+    """
+    try:
+        result = compare(scene_name, params)
+    except (KeyError, ValueError, TypeError, exu.SolverError) as exc:
+        msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        print(f"flexbody compare: error: {msg}", file=sys.stderr)
+        return 2
+    if not quiet:
+        print("\n".join(table_lines(result)))
+    if json_path:
+        try:
+            with open(json_path, "w", encoding="utf-8") as fh:
+                json.dump(_json_ready(result), fh, indent=2)
+        except OSError as exc:
+            print(f"flexbody compare: error: cannot write {json_path!r}: {exc.strerror or exc}", file=sys.stderr)
+            return 2
+        if not quiet:
+            print(f"written          {json_path}")
+    if not result["ok"]:
+        failed = [f"{k}: {result[k]['message']}" for k in ("flexbody", "exudyn") if not result[k]["converged"]]
+        print(f"flexbody compare: error: run did not converge ({'; '.join(failed)})", file=sys.stderr)
+        return 2
+    return 0
+
+
+# ----------------------------------------------------------------------------------------------------------
+# our shell inside an exudyn system
+# ----------------------------------------------------------------------------------------------------------
+
+class ShellODE2:
+    """A flexbody ``Model`` (shell body, its constraints and loads) as one exudyn ``ObjectGenericODE2``.
+
+    The exudyn coordinates q are the Model's free DoFs: per node the translation in fixed directions
+    (global x, y, z, or the constraint basis E_I of a symmetry node) and the two in-plane rotations. The
+    shell's nodal frames are not functions of coordinates: the drilling-free update of the 5-DoF nodes is
+    a non-holonomic rule, so the frames are history (see ``flexbody.dynamics``). The wrapper keeps that
+    history itself: it holds the state of the last committed step (x_n, R_n, q_n) and maps
+    q -> x = x_n + dx, R = R_n exp(dtheta_1 e_1 + dtheta_2 e_2) with (dx, dtheta) from q - q_n; a pre-step
+    user function commits at the start of every load step. The user force is -r (the Model's residual at
+    the load factor lambda(t) of exudyn's pseudo-time t), so exudyn's equilibrium is flexbody's. The
+    Jacobian is the Model's tangent with the translation columns turned to fixed directions and the
+    rotation columns times the in-plane block of the tangent operator T(dtheta). The drilling row of
+    T(dtheta) couples to a column the Model does not have and is dropped: the Jacobian is exact at the
+    start of a step and off by O(|dtheta|) inside it, so Newton converges to the same solution, a little
+    slower than quadratically.
+
+    Dynamics: with ``mass`` (the constant lumped mass on the free DoFs, ``flexbody.dynamics.DynamicModel``'s
+    ``mass``; in these coordinates there are no gyroscopic or centrifugal terms) exudyn's implicit
+    integrators run the shell; the velocities q_t are taken as the DoF velocities (fixed-direction
+    translation rates, local angular velocities w_1, w_2), committed with the frames at every step.
+    Without ``mass`` the mass matrix is zero: statics only.
+
+    Parameters
+    ----------
+    mbs : the exudyn MainSystem to add the node and object to
+    model : the flexbody model; its loads are scaled by the load factor ``load_factor(t)``
+    load_factor : lambda(t) of exudyn's (pseudo-)time; default lambda = t (static solver: t runs 0 to 1)
+    mass : (n_dof,) diagonal mass matrix on the free DoFs, or None (statics)
+    velocity : (n_dof,) initial velocity (e.g. ``DynamicModel.rigid_velocity``), or None (at rest)
+    on_commit : called as ``on_commit(t, state)`` with every committed state and its (pseudo-)time
+    """
+
+    def __init__(self, mbs, model, load_factor=None, mass: np.ndarray | None = None,
+                 velocity: np.ndarray | None = None, on_commit=None) -> None:
+        self.model = model
+        self.mbs = mbs
+        self.load_factor = load_factor if load_factor is not None else (lambda t: float(t))
+        self.on_commit = on_commit
+        n = model.n_dof
+        v0 = [0.0] * n if velocity is None else [float(v) for v in velocity]
+        if len(v0) != n:
+            raise ValueError(f"velocity must have {n} entries (the free DoFs), got {len(v0)}")
+        self.node = mbs.AddNode(eii.NodeGenericODE2(numberOfODE2Coordinates=n, referenceCoordinates=[0.0] * n,
+                                                    initialCoordinates=[0.0] * n, initialCoordinates_t=v0))
+        mass_matrix = exu.MatrixContainer()
+        if mass is None:
+            mass_matrix.SetWithSparseMatrixCSR(n, n, [], useDenseMatrix=False)
+        else:
+            mass = np.asarray(mass, float)
+            if mass.shape != (n,) or np.any(mass <= 0):
+                raise ValueError(f"mass must be {n} positive diagonal entries, got shape {mass.shape}")
+            mass_matrix.SetWithSparseMatrix(sparse.diags(mass).tocsr())
+        self.object = mbs.AddObject(eii.ObjectGenericODE2(nodeNumbers=[self.node], massMatrix=mass_matrix,
+                                                          forceUserFunction=self._force,
+                                                          jacobianUserFunction=self._jacobian))
+        self.state_n = model.initial_state()
+        self.q_n = np.zeros(n)
+        self.t_n = 0.0                                   # time of the committed state
+        self.calls = {"force": 0, "jacobian": 0, "commit": 0}
+        self._n_nodes = model.body.n_nodes
+        self._basis_nodes = np.flatnonzero(model.has_basis)
+        self._local_nodes = np.flatnonzero(~model.has_basis)
+
+    def coordinate_index(self, node: int, component: int) -> int:
+        """Index in q of a free component (0-2 translation, 3-4 in-plane rotation) of a flexbody node."""
+        k = np.flatnonzero(self.model.free == 6 * node + component)
+        if k.size == 0:
+            raise ValueError(f"component {component} of node {node} is not a free DoF of the model")
+        return int(k[0])
+
+    def _increments(self, q: np.ndarray) -> np.ndarray:
+        d6 = np.zeros(6 * self._n_nodes)
+        d6[self.model.free] = q - self.q_n
+        return d6.reshape(self._n_nodes, 6)
+
+    def state(self, q) -> ShellState:
+        """The shell state of coordinates q (relative to the last committed step)."""
+        d6 = self._increments(np.asarray(q, float))
+        dx = d6[:, :3].copy()
+        b = self._basis_nodes
+        dx[b] = np.einsum("nij,nj->ni", self.model.basis[b], d6[b, :3])
+        return update_state(self.state_n, dx, d6[:, 3:5], np.arange(self._n_nodes))
+
+    def coordinates(self) -> np.ndarray:
+        """The wrapped shell's current coordinates q in the exudyn system."""
+        mbs = self.mbs
+        return np.asarray(mbs.systemData.GetODE2Coordinates())[mbs.systemData.GetObjectLTGODE2(self.object)]
+
+    def _step_start(self, mbs, t: float) -> float:
+        """Start time of the step exudyn is about to take (it passes the end time t to pre-step functions)."""
+        for key in ("dynamicSolver", "staticSolver"):
+            solver = mbs.sys.get(key)
+            if solver is not None and abs(float(solver.it.currentTime) - t) <= 1e-12 * max(1.0, abs(t)):
+                return t - float(solver.it.currentStepSize)
+        return self.t_n
+
+    def commit(self, mbs, t) -> bool:
+        """exudyn pre-step user function: the current coordinates become the new committed state.
+
+        The coordinates are those at the start of the step (after a rejected step exudyn restores them and
+        calls this again: the same state is committed again, and reported once). ``on_commit`` receives
+        the committed state and its time, the step's start.
+        """
+        self.calls["commit"] += 1
+        t_start = self._step_start(mbs, float(t))
+        q = self.coordinates()
+        self.state_n = self.state(q)
+        self.q_n = q.copy()
+        if self.on_commit is not None and (self.calls["commit"] == 1 or abs(t_start - self.t_n) > 1e-12):
+            self.on_commit(t_start, self.state_n)
+        self.t_n = t_start
+        return True
+
+    def _force(self, mbs, t, item, q, q_t):
+        self.calls["force"] += 1
+        return (-self.model.residual(self.state(q), self.load_factor(t))).tolist()
+
+    def _column_map(self, q: np.ndarray, frames: np.ndarray):
+        """d(Model increments)/dq: R^T for translations of non-basis nodes, T(dtheta)[:2, :2] for rotations."""
+        d6 = self._increments(q)
+        blocks = np.tile(np.eye(6), (self._n_nodes, 1, 1))
+        a = self._local_nodes
+        blocks[a, :3, :3] = np.transpose(frames[a], (0, 2, 1))
+        for i in np.flatnonzero(np.any(d6[:, 3:5] != 0, axis=1)):
+            blocks[i, 3:5, 3:5] = tangent(np.array([d6[i, 3], d6[i, 4], 0.0]))[:2, :2]
+        free = self.model.free
+        return sparse.block_diag(list(blocks), format="csr")[free][:, free]
+
+    def _jacobian(self, mbs, t, item, q, q_t, f_ode2, f_ode2_t):
+        self.calls["jacobian"] += 1
+        q = np.asarray(q, float)
+        state = self.state(q)
+        _, K = self.model.residual_and_tangent(state, self.load_factor(t))
+        J = (K @ self._column_map(q, state.frames)).tocsr() * float(f_ode2)
+        J.eliminate_zeros()
+        out = exu.MatrixContainer()
+        out.SetWithSparseMatrix(J)
+        return out
+
+
+def solve_scene_in_exudyn(scene: Scene, constraints=None, rtol: float = 1e-10) -> dict:
+    """Run a load-controlled flexbody scene with exudyn's static solver, the shell wrapped as ``ShellODE2``.
+
+    Parameters
+    ----------
+    scene : a flexbody scene with ``load_control`` analysis; exudyn stops at its load factors (N equal
+        steps of exudyn's pseudo-time t, mapped piecewise linearly to the N load factors)
+    constraints : optional callable ``constraints(mbs, shell)`` adding exudyn items (joints, coordinate
+        constraints) that act on the wrapped shell, e.g. a clamp given in exudyn instead of in flexbody
+    rtol : exudyn's relative Newton tolerance
+
+    Returns
+    -------
+    dict with "converged", "message", "outputs" (final value of each scene output), "newton_iterations",
+    "wall_time_s", "calls" (user-function calls), "dofs".
+    """
+    if scene.analysis.method != "load_control":
+        raise ValueError("solve_scene_in_exudyn needs a load-controlled scene")
+    lf = np.asarray(scene.analysis.load_factors, float)
+    t_grid = np.linspace(0.0, 1.0, len(lf) + 1)
+    lam = np.concatenate([[0.0], lf])
+    sc, mbs = _new_system()
+    shell = ShellODE2(mbs, scene.model, lambda t: float(np.interp(t, t_grid, lam)))
+    if constraints is not None:
+        constraints(mbs, shell)
+    mbs.SetPreStepUserFunction(shell.commit)
+    mbs.Assemble()
+    s = exu.SimulationSettings()
+    s.staticSolver.numberOfLoadSteps = len(lf)
+    s.staticSolver.verboseMode = 0
+    s.staticSolver.newton.relativeTolerance = rtol
+    s.solution.file.write = False
+    s.linearSolver.solverType = exu.LinearSolverType.EigenSparse
+    converged, message = True, "completed"
+    print_to_console = exu.config.printToConsole
+    exu.config.printToConsole = False
+    t0 = time.perf_counter()
+    try:
+        mbs.SolveStatic(s, storeSolver=True, showHints=False)
+    except exu.SolverError as exc:
+        converged, message = False, f"exudyn SolverError: {str(exc).splitlines()[0]}"
+    finally:
+        wall = time.perf_counter() - t0
+        exu.config.printToConsole = print_to_console
+    q = np.asarray(mbs.systemData.GetODE2Coordinates())[mbs.systemData.GetObjectLTGODE2(shell.object)]
+    state = shell.state(q)
+    solver = mbs.sys.get("staticSolver")
+    return {"converged": converged, "message": message,
+            "outputs": {o.name: o.value(scene.model, state) for o in scene.outputs},
+            "newton_iterations": int(solver.it.newtonStepsCount) if solver is not None else 0,
+            "wall_time_s": wall, "calls": dict(shell.calls), "dofs": scene.model.n_dof,
+            "load_factor": float(np.interp(mbs.systemData.GetTime(), t_grid, lam))}
