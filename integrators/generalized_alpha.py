@@ -44,6 +44,8 @@ tumbling plate of the tests runs 600 steps on one factorization.
 
 from __future__ import annotations
 
+import dataclasses
+
 from dataclasses import dataclass
 import time
 from typing import Callable
@@ -236,6 +238,7 @@ class GeneralizedAlpha:
         any_fresh, need, prev = fresh, fresh, None
         eta = np.inf                              # no contraction estimate before the second correction
         for k in range(s.max_iterations):
+            used_fresh = need
             try:
                 if need:
                     r = self._refresh(step, t)
@@ -248,6 +251,7 @@ class GeneralizedAlpha:
             except (FloatingPointError, SingularMatrixError) as exc:
                 return None, str(exc), any_fresh
             residuals.append(float(np.linalg.norm(r)))
+            before = dataclasses.replace(step)
             # Newton correction of x = h dq_n, of the velocity and of the accelerations (beta', gamma')
             step.x = step.x + dx
             step.v = step.v + gp * dx
@@ -266,6 +270,11 @@ class GeneralizedAlpha:
                 return step, k + 1, residuals, corrections, refreshes, any_fresh
             if prev is not None:
                 theta = err / prev
+                if theta >= 1.0 and not used_fresh:      # an old matrix made it worse: undo, refresh, redo
+                    step = before
+                    corrections.pop()
+                    need = True
+                    continue
                 if theta >= 1.0:                         # not contracting: Newton steps with fresh matrices
                     if err > s.divergence_factor * corrections[0]:
                         return None, (f"diverging corrections {[f'{c:.2e}' for c in corrections]}"), any_fresh
