@@ -32,6 +32,15 @@ BENCH_MESHES: dict[str, list[dict]] = {
 }
 
 
+#: how many time steps a bench of a dynamic scene runs: dt, dt/2, dt/4 (dt: the scene's, or --set dt=...)
+BENCH_TIME_STEPS = 3
+
+
+def _default_bench_scenes() -> list[str]:
+    from flexbody.scenes.builtin import DYNAMIC
+    return list(BENCH_MESHES) + list(DYNAMIC)
+
+
 class CliError(Exception):
     """Bad command-line input or a bad scene: printed as one line, exit code 2."""
 
@@ -134,8 +143,11 @@ def _progress_printer(quiet: bool, prefix: str = ""):
     t0 = time.perf_counter()
 
     def progress(rec):
-        print(f"{prefix}  step {rec.step:4d}  load factor {rec.load_factor:8.4f}  iterations {rec.iterations:2d}"
-              f"  {time.perf_counter() - t0:7.2f} s", file=sys.stderr, flush=True)
+        if hasattr(rec, "time"):   # a dynamic step record
+            where = f"time {rec.time:10.5g} s  iterations {rec.iterations:2d}  energy {rec.total_energy:11.5g}"
+        else:
+            where = f"load factor {rec.load_factor:8.4f}  iterations {rec.iterations:2d}"
+        print(f"{prefix}  step {rec.step:4d}  {where}  {time.perf_counter() - t0:7.2f} s", file=sys.stderr, flush=True)
     return progress
 
 
@@ -156,23 +168,45 @@ def cmd_list(args) -> int:
 # run
 # ----------------------------------------------------------------------------------------------------------
 
+def _balance_lines(d: dict) -> list[str]:
+    """The energy and momentum lines of a dynamic run's summary."""
+    e, m = d["energy"], d["momentum"]
+    lines = [f"energy           kinetic {e['kinetic']['initial']:.5g} -> {e['kinetic']['final']:.5g}, strain "
+             f"{e['strain']['initial']:.5g} -> {e['strain']['final']:.5g} (max {e['strain']['max']:.5g}), "
+             f"gravity {e['gravity']['initial']:.5g} -> {e['gravity']['final']:.5g}",
+             f"energy drift     {e['total']['max_rel_drift']:.3e} (max |E - E0| / max(T + W + |Vg|)"
+             f"{'' if e['conservative'] else '; not conserved: loads or prescribed motion do work'})",
+             f"momentum drift   linear {m['linear']['max_rel_drift']:.3e}, angular {m['angular']['max_rel_drift']:.3e}"
+             f" ({'isolated body: both conserved' if m['isolated'] else 'not isolated: exchanged with supports, loads or gravity'})"]
+    return lines
+
+
 def summary_lines(summary) -> list[str]:
     """The printed run summary (the same content as the --json file)."""
     d = summary.as_dict()
+    dynamic = d.get("kind") == "dynamic"
+    if dynamic:
+        reached = (f"time reached {d['time']:.4g} s of {d['end_time']:.4g} s, dt {d['time_step']:.4g} s, "
+                   f"rho_inf {d['rho_inf']:g}, {d['policy']} iteration matrix")
+    else:
+        reached = f"load factor reached {d['load_factor']:.4g}"
     lines = [
-        f"scene            {d['scene']}",
+        f"scene            {d['scene']}" + (" (dynamic)" if dynamic else ""),
         f"DoFs / elements  {d['dofs']} / {d['elements']}",
-        f"steps            {d['steps']}  (load factor reached {d['load_factor']:.4g})",
+        f"steps            {d['steps']}  ({reached})",
         f"Newton           {d['newton_iterations']} iterations, {d['tangent_updates']} tangent updates, "
         f"{d['factorizations']} factorizations",
         f"wall time        {d['wall_time_s']:.2f} s",
     ]
     for k, v in d["outputs"].items():
         lines.append(f"output           {k} = {v:.6g}")
+    if dynamic:
+        lines += _balance_lines(d)
     if d["errors"]:
         worst = max(d["errors"], key=lambda e: e["rel_error"])
-        lines.append(f"max rel. error   {d['max_rel_error']:.3e}  ({worst['quantity']} at load factor "
-                     f"{worst['load_factor']:.3g}: {worst['value']:.5g} vs reference {worst['reference']:.5g})")
+        at = f"time {worst['time']:.4g} s" if dynamic else f"load factor {worst['load_factor']:.3g}"
+        lines.append(f"max rel. error   {d['max_rel_error']:.3e}  ({worst['quantity']} at {at}: "
+                     f"{worst['value']:.5g} vs reference {worst['reference']:.5g})")
     if not d["converged"]:
         lines.append(f"NOT CONVERGED    {d['message']}")
     return lines
@@ -229,13 +263,17 @@ def cmd_run(args) -> int:
 # bench
 # ----------------------------------------------------------------------------------------------------------
 
-def _mesh_sequence(source, refine: list[dict]) -> list[dict]:
-    """The meshes a bench runs for one scene: --refine, else the built-in table, else the scene's density
-    parameters at 1x and 2x, else the scene as it is."""
+def _mesh_sequence(source, refine: list[dict], scene=None) -> list[dict]:
+    """The runs of a bench for one scene: --refine; else the built-in table; else, for a dynamic scene
+    (``scene``, built with the common overrides) whose time step is the key ``dt``, the time steps dt, dt/2,
+    dt/4; else the scene's density parameters at 1x and 2x; else the scene as it is."""
     if refine:
         return refine
     if source.kind == "builtin" and source.name in BENCH_MESHES:
         return BENCH_MESHES[source.name]
+    if scene is not None and scene.kind == "dynamic" and (source.keys is None or "dt" in source.keys):
+        dt = scene.analysis.time_step
+        return [dict(dt=dt / 2**k) for k in range(BENCH_TIME_STEPS)]
     if source.kind == "toml" and source.density:
         return [dict(source.density), {k: 2 * v for k, v in source.density.items()}]
     return [{}]
@@ -252,6 +290,9 @@ def _bench_one(source, params: dict, label: str, quiet: bool):
     try:
         model = scene.model
         model.residual_and_tangent(model.initial_state(), 0.0)  # compile the kernels outside the timed run
+        if scene.kind == "dynamic":                              # and the strain-energy kernel
+            from flexbody.dynamics import DynamicModel
+            DynamicModel(model).strain_energy(model.initial_state())
         summary = run_scene(scene, progress=_progress_printer(quiet, f"  [{label}]") if not quiet else None)
     except (ValueError, ArithmeticError, RuntimeError) as exc:
         return BenchRun(scene.name, label, params, failure=f"the analysis failed: {_run_failure(exc)}")
@@ -261,6 +302,15 @@ def _bench_one(source, params: dict, label: str, quiet: bool):
                      for k, v in scene.reference.values.items()}
     return BenchRun(scene.name, label, params, summary.as_dict(), {k: list(v) for k, v in summary.history.items()},
                     reference, reference_source=scene.reference.source if scene.reference else "")
+
+
+def _bench_plan(source, common: dict, refine: list[dict]) -> list[dict]:
+    """The runs of one scene (:func:`_mesh_sequence`), its first run's scene built to report a bad key now."""
+    needs_scene = not refine and not (source.kind == "builtin" and source.name in BENCH_MESHES)
+    scene = _build(source, common) if needs_scene else None
+    meshes = _mesh_sequence(source, refine, scene)
+    _build(source, {**common, **meshes[0]})
+    return meshes
 
 
 def _prepare_out_dir(path: str) -> None:
@@ -279,14 +329,12 @@ def cmd_bench(args) -> int:
     from flexbody.outputs.report import mesh_label, write_report
     common = _parse_sets(args.set or [])
     refine = _parse_refine(args.refine or [])
-    names = args.scenes or list(BENCH_MESHES)
+    names = args.scenes or _default_bench_scenes()
     sources = [_open(name) for name in names]
-    for source in sources:  # a bad scene or key stops the bench before its first long run
-        _build(source, {**common, **_mesh_sequence(source, refine)[0]})
+    plans = [_bench_plan(source, common, refine) for source in sources]  # a bad scene or key stops it now
     _prepare_out_dir(args.out)
     runs, failed = [], 0
-    for source in sources:
-        meshes = _mesh_sequence(source, refine)
+    for source, meshes in zip(sources, plans):
         if meshes == [{}]:
             print(f"note: {source.name} runs at one mesh; give --refine KEY=V1,V2,... for a sequence",
                   file=sys.stderr)
@@ -348,7 +396,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.set_defaults(func=cmd_run)
 
     bench = sub.add_parser("bench", help="run scenes on a sequence of meshes; write report.md and plots")
-    bench.add_argument("scenes", nargs="*", help=f"scenes (default: {', '.join(BENCH_MESHES)})")
+    bench.add_argument("scenes", nargs="*", help=f"scenes (default: {', '.join(BENCH_MESHES)} and the dynamic "
+                       "scenes, on time steps dt, dt/2, dt/4)")
     bench.add_argument("--refine", action="append", metavar="KEY=V1,V2,...",
                        help="the mesh sequence, e.g. --refine nx=4,8,16 (repeat for more keys, equal lengths)")
     bench.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a parameter in every run")

@@ -42,6 +42,23 @@ def check_distinct(paths: dict[str, str | None]) -> None:
         seen[key] = option
 
 
+#: the statistics a dynamic run adds to the HDF5 file, per step
+DYNAMIC_STATS = ("refreshes", "kinetic_energy", "strain_energy", "gravity_energy", "total_energy",
+                 "linear_momentum_x", "linear_momentum_y", "linear_momentum_z",
+                 "angular_momentum_x", "angular_momentum_y", "angular_momentum_z")
+
+
+def dynamic_stats(rec) -> dict[str, float]:
+    """The :data:`DYNAMIC_STATS` of a dynamic step record (``integrators.generalized_alpha.DynamicStepRecord``)."""
+    out = {"refreshes": float(rec.refreshed), "kinetic_energy": float(rec.kinetic_energy),
+           "strain_energy": float(rec.strain_energy), "gravity_energy": float(rec.potential_energy),
+           "total_energy": float(rec.total_energy)}
+    for name, vec in (("linear_momentum", rec.linear_momentum), ("angular_momentum", rec.angular_momentum)):
+        for axis, value in zip("xyz", vec):
+            out[f"{name}_{axis}"] = float(value)
+    return out
+
+
 class RunRecorder:
     """Open the requested output files for a scene and write one record per converged step.
 
@@ -53,24 +70,32 @@ class RunRecorder:
     directors : also log the directors as arrows in the recording
 
     Use as a context manager; pass :meth:`on_step` to ``run_scene``.
+
+    A dynamic scene (``scene.kind == "dynamic"``) writes files of kind "dynamic": the steps carry the time
+    (``/steps/time``, the rerun ``time`` timeline), the initial state is step 0, and the HDF5 statistics add
+    the energies and momenta of every step (:data:`DYNAMIC_STATS`).
     """
 
     def __init__(self, scene, h5: str | None = None, rerun: str | None = None, directors: bool = False):
         self.scene = scene
+        self.kind = getattr(scene, "kind", "static")
         self.names = [o.name for o in scene.outputs]
         self.steps_written = 0
         self._h5 = self._rrd = None
         mesh = scene.model.body.mesh
         try:
             if h5:
-                from flexbody.outputs.hdf5 import Hdf5Writer
-                self._h5 = Hdf5Writer(h5, mesh, scene.name, scene.parameters, self.names)
+                from flexbody.outputs.hdf5 import DEFAULT_STATS, Hdf5Writer
+                stats = DEFAULT_STATS + DYNAMIC_STATS if self.kind == "dynamic" else DEFAULT_STATS
+                self._h5 = Hdf5Writer(h5, mesh, scene.name, scene.parameters, self.names, kind=self.kind,
+                                      stats=stats)
             if rerun:
                 from flexbody.outputs.rerun_log import RerunLogger
                 reference = None
                 if scene.reference is not None:
                     reference = {k: (scene.reference.load_factors, v) for k, v in scene.reference.values.items()}
-                self._rrd = RerunLogger(rerun, mesh, scene.name, directors=directors, reference=reference)
+                self._rrd = RerunLogger(rerun, mesh, scene.name, directors=directors, reference=reference,
+                                        kind=self.kind)
         except BaseException:
             self.close()
             raise
@@ -83,11 +108,15 @@ class RunRecorder:
     def on_step(self, rec, state, history) -> None:
         """``run_scene`` hook: write the step to every open file and flush them."""
         tracked = {k: history[k][-1] for k in self.names}
+        where = rec.time if self.kind == "dynamic" else rec.load_factor
         if self._h5 is not None:
             from flexbody.outputs.hdf5 import record_stats
-            self._h5.write_step(rec.step, rec.load_factor, state, tracked, record_stats(rec))
+            stats = record_stats(rec)
+            if self.kind == "dynamic":
+                stats.update(dynamic_stats(rec))
+            self._h5.write_step(rec.step, where, state, tracked, stats)
         if self._rrd is not None:
-            self._rrd.log_step(rec.step, rec.load_factor, state, tracked)
+            self._rrd.log_step(rec.step, where, state, tracked)
             self._rrd.flush()
         self.steps_written += 1
 

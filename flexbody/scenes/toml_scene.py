@@ -11,11 +11,17 @@ In short (every table but ``[mesh]``, ``[material]`` and one ``[[output]]`` is o
     [[load]]               type = "nodal" | "edge_force" | "edge_moment" | "surface_force" | "pressure"
     [analysis]             method = "load_control" | "arc_length", steps, max_load_factor, ...
     [analysis.newton]      any field of integrators.newton.NewtonSettings
-    [[output]]             name, a node selection of one node, component or direction, scale
-    [reference]            file = "ref.csv", load_factor = column, columns = {output = column}
+      or [analysis]        type = "dynamic", dt, end_time, rho_inf, policy, output_every, gravity, load_ramp_time
+    [analysis.initial]     velocity, angular_velocity, center: a rigid initial velocity field (dynamic)
+    [analysis.hub]         a node selection, angular_velocity, ramp_time, center: a hub spun up (dynamic)
+    [analysis.integrator]  rtol, atol, max_iterations, refresh_ratio, max_cutbacks, ... (dynamic)
+    [[output]]             name, a node selection of one node, component or direction, scale; or
+                           type = "radial" (mean radial displacement of nodes) | "angular_velocity"
+    [reference]            file = "ref.csv", load_factor (or time) = column, columns = {output = column}
 
 A node selection is exactly one of ``set`` (a node or edge set name, or a list of them), ``nodes`` (indices),
-``near`` (the node nearest a point) or ``plane`` (``{point = [...], normal = [...]}``: the nodes on it).
+``near`` (the node nearest a point), ``plane`` (``{point = [...], normal = [...]}``: the nodes on it) or
+``ring`` (``{radius = r, center = [...], axis = [...]}``: the nodes at distance r from the axis).
 
 Every error is a :class:`SceneError` whose one-line message names the file, the key and the bad value.
 ``--set KEY=VALUE`` overrides a value by its dotted key (``mesh.nx``, ``load.0.value``) or by its last part
@@ -33,7 +39,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from flexbody.scenes.scene import Output, Reference, Scene, StaticAnalysis
+from flexbody.scenes.scene import (AngularVelocity, DynamicAnalysis, Output, RadialDisplacement, Reference, Scene,
+                                   StaticAnalysis)
 
 
 class SceneError(ValueError):
@@ -51,10 +58,13 @@ DENSITY_PARAMETERS = {
 #: generator parameters in radians that may be given in degrees with the suffix ``_deg``
 _RADIAN_PARAMETERS = ("angle",)
 _SECTIONS = ("name", "description", "mesh", "material", "element", "bc", "load", "analysis", "output", "reference")
-_SELECTORS = ("set", "nodes", "near", "plane")
+_SELECTORS = ("set", "nodes", "near", "plane", "ring")
 _MATERIAL_KEYS = ("young", "poisson", "thickness", "density", "shear_correction")
 _ANALYSIS_KEYS = ("method", "steps", "max_load_factor", "load_factors", "arc_increment", "max_load_increment",
                   "newton")
+_DYNAMIC_KEYS = ("type", "dt", "end_time", "rho_inf", "policy", "output_every", "gravity", "load_ramp_time",
+                 "initial", "hub", "integrator")
+_OUTPUT_TYPES = ("displacement", "radial", "angular_velocity")
 _ELEMENT_KEYS = ("tying", "kernel")
 _COMPONENTS = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
@@ -102,6 +112,7 @@ def _section_keys(doc: dict) -> dict[str, str]:
     """Bare keys that may be set although the document does not write them: key -> dotted key."""
     keys = {k: f"material.{k}" for k in _MATERIAL_KEYS}
     keys.update({k: f"analysis.{k}" for k in _ANALYSIS_KEYS if k != "newton"})
+    keys.update({k: f"analysis.{k}" for k in _DYNAMIC_KEYS if k not in ("type", "initial", "hub", "integrator")})
     keys.update({k: f"element.{k}" for k in _ELEMENT_KEYS})
     generator = doc.get("mesh", {}).get("generator") if isinstance(doc.get("mesh"), dict) else None
     if generator in GENERATOR_NAMES:
@@ -328,6 +339,22 @@ def _select_nodes(t: _Table, mesh, *, single: bool = False) -> np.ndarray:
         nodes = np.unique(np.array(value, dtype=int))
     elif kind == "near":
         nodes = np.array([mesh.nearest_node(t.vector("near"))])
+    elif kind == "ring":
+        ring = t.table("ring")
+        radius = ring.number("radius", positive=True)
+        center, axis = ring.vector("center", [0.0, 0.0, 0.0]), ring.vector("axis", [0.0, 0.0, 1.0])
+        ring.done(["radius", "center", "axis"])
+        if not np.abs(axis).max() > 0:
+            raise ring.error("axis", f"must be a nonzero vector, got {axis.tolist()}")
+        n = axis / np.abs(axis).max()
+        n = n / np.linalg.norm(n)
+        r = mesh.nodes - center
+        distance = np.linalg.norm(r - np.outer(r @ n, n), axis=1)
+        size = float(np.ptp(mesh.nodes, axis=0).max()) or 1.0
+        nodes = np.flatnonzero(np.abs(distance - radius) <= 1e-8 * size)
+        if nodes.size == 0:
+            raise SceneError(f"{t.where}: {t.key('ring')} selects no nodes (no node lies at distance {radius} "
+                             f"from the axis through {center.tolist()} along {axis.tolist()})")
     else:
         plane = t.table("plane")
         point, normal = plane.vector("point"), plane.vector("normal")
@@ -432,7 +459,93 @@ def _build_newton(t: _Table | None):
     return _wrap(t.where, "analysis.newton", NewtonSettings, **kwargs)
 
 
+def _analysis_type(doc: dict, where: str) -> str:
+    """"static" or "dynamic": the ``type`` of ``[analysis]`` (a SceneError for anything else)."""
+    analysis = doc.get("analysis", {})
+    if not isinstance(analysis, dict):
+        return "static"          # reported as "analysis must be a table" when the analysis is built
+    return _Table(analysis, "analysis", where).string("type", "static", choices=("static", "dynamic"))
+
+
+def _build_integrator(t: _Table | None):
+    """The :class:`integrators.generalized_alpha.AlphaSettings` of ``[analysis.integrator]``."""
+    from dataclasses import fields
+
+    from integrators.generalized_alpha import AlphaSettings
+    if t is None:
+        return None
+    names = [f.name for f in fields(AlphaSettings) if f.name not in ("rho_inf", "policy")]
+    kwargs = {}
+    for f in fields(AlphaSettings):
+        if f.name not in names or not t.has(f.name):
+            continue
+        if f.default.__class__ is bool:
+            kwargs[f.name] = t.boolean(f.name)
+        elif f.default.__class__ is int:
+            kwargs[f.name] = t.integer(f.name, minimum=0)
+        else:
+            kwargs[f.name] = t.number(f.name, positive=True)
+    t.done(names)
+    return _wrap(t.where, "analysis.integrator", AlphaSettings, **kwargs)
+
+
+def _centre_of_mass(body) -> np.ndarray:
+    from flexbody.shell.inertia import nodal_inertia
+    m = nodal_inertia(body).mass
+    return (m @ body.mesh.nodes) / m.sum()
+
+
+def _hub_nodes(doc_analysis: Any, mesh, where: str) -> np.ndarray | None:
+    """The nodes of ``[analysis.hub]`` (clamped to the hub), or None."""
+    if not isinstance(doc_analysis, dict) or "hub" not in doc_analysis:
+        return None
+    hub = _Table(doc_analysis["hub"], "analysis.hub", where)
+    return _select_nodes(hub, mesh)
+
+
+def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None) -> DynamicAnalysis:
+    """``[analysis] type = "dynamic"`` with its ``initial``, ``hub`` and ``integrator`` tables."""
+    from flexbody.dynamics import PrescribedMotion
+    from flexbody.scenes.dynamic_run import hub_spin_up, rigid_field
+    t.string("type", choices=("static", "dynamic"))
+    dt, end = t.number("dt", positive=True), t.number("end_time", positive=True)
+    rho_inf = t.number("rho_inf", 0.9)
+    policy = t.string("policy", "modified", choices=("modified", "full"))
+    every = t.integer("output_every", 1)
+    gravity = t.vector("gravity", [0.0, 0.0, 0.0])
+    ramp = t.number("load_ramp_time", 0.0)
+    if ramp < 0:
+        raise t.error("load_ramp_time", f"must be >= 0, got {ramp!r}")
+    load_factor = (lambda time_, T=ramp: min(time_ / T, 1.0)) if ramp > 0 else None
+    settings = _build_integrator(t.table("integrator") if t.has("integrator") else None)
+    kwargs: dict[str, Any] = {}
+    if t.has("initial"):
+        it = t.table("initial")
+        omega = it.vector("angular_velocity", [0.0, 0.0, 0.0])
+        velocity = it.vector("velocity", [0.0, 0.0, 0.0])
+        center = it.vector("center") if it.has("center") else _centre_of_mass(body)
+        it.done(["velocity", "angular_velocity", "center"])
+        xdot, w = rigid_field(body.mesh.nodes, omega, center, velocity)
+        kwargs.update(initial_velocity=xdot, initial_angular_velocity=w)
+    if t.has("hub"):
+        ht = t.table("hub")
+        for key in _SELECTORS:       # already read by _hub_nodes
+            ht.used.add(key)
+        omega = ht.vector("angular_velocity")
+        hub_ramp = ht.number("ramp_time", 0.0)
+        if hub_ramp < 0:
+            raise ht.error("ramp_time", f"must be >= 0, got {hub_ramp!r}")
+        center = ht.vector("center", [0.0, 0.0, 0.0])
+        ht.done([*_SELECTORS, "angular_velocity", "ramp_time", "center"])
+        kwargs["prescribed"] = (PrescribedMotion(hub_nodes, hub_spin_up(omega, hub_ramp, center)),)
+    t.done(list(_DYNAMIC_KEYS))
+    return _wrap(t.where, "analysis", DynamicAnalysis, dt, end, rho_inf, policy, every, tuple(gravity),
+                 load_factor, settings=settings, **kwargs)
+
+
 def _build_analysis(t: _Table) -> StaticAnalysis:
+    if t.has("type"):
+        t.string("type", choices=("static", "dynamic"))
     method = t.string("method", "load_control", choices=("load_control", "arc_length"))
     newton = _build_newton(t.table("newton") if t.has("newton") else None)
     lam_max = t.number("max_load_factor", 1.0, positive=True)
@@ -446,21 +559,38 @@ def _build_analysis(t: _Table) -> StaticAnalysis:
         else:
             steps = t.integer("steps", 10)
             lf = list(np.linspace(0.0, lam_max, steps + 1)[1:])
-        t.done(["method", "steps", "max_load_factor", "load_factors", "newton"])
+        t.done(["type", "method", "steps", "max_load_factor", "load_factors", "newton"])
         return StaticAnalysis("load_control", tuple(lf), newton=newton)
     arc = t.number("arc_increment", 0.05, positive=True)
     cap = t.number("max_load_increment", None, positive=True)
-    t.done(["method", "max_load_factor", "arc_increment", "max_load_increment", "newton"])
+    t.done(["type", "method", "max_load_factor", "arc_increment", "max_load_increment", "newton"])
     return StaticAnalysis("arc_length", (lam_max,), arc, cap, newton)
 
 
-def _build_outputs(tables: list[_Table], mesh) -> list[Output]:
+def _build_outputs(tables: list[_Table], mesh, dynamic: bool = False) -> list:
     out, names = [], set()
     for t in tables:
         name = t.string("name")
         if "/" in name or name in names:
             raise t.error("name", f"must be unique and without '/', got {name!r}")
         names.add(name)
+        kind = t.string("type", "displacement", choices=_OUTPUT_TYPES)
+        if kind == "radial":
+            nodes = _select_nodes(t, mesh)
+            axis = t.vector("axis", [0.0, 0.0, 1.0])
+            if not np.abs(axis).max() > 0:
+                raise t.error("axis", f"must be a nonzero vector, got {axis.tolist()}")
+            out.append(RadialDisplacement(name, tuple(int(i) for i in nodes), tuple(t.vector("center", [0, 0, 0])),
+                                          tuple(axis), t.number("scale", 1.0)))
+            t.done(["name", "type", *_SELECTORS, "center", "axis", "scale"])
+            continue
+        if kind == "angular_velocity":
+            if not dynamic:
+                raise t.error("type", "'angular_velocity' needs a dynamic analysis ([analysis] type = \"dynamic\")")
+            component = t.string("component", choices=tuple(_COMPONENTS))
+            out.append(AngularVelocity(name, "xyz".index(component)))
+            t.done(["name", "type", "component"])
+            continue
         node = int(_select_nodes(t, mesh, single=True)[0])
         if t.has("component") == t.has("direction"):
             raise SceneError(f"{t.where}: [{t.path}] needs exactly one of 'component' (x, y or z) or 'direction'")
@@ -472,11 +602,11 @@ def _build_outputs(tables: list[_Table], mesh) -> list[Output]:
                 raise t.error("direction", f"must be a nonzero vector, got {d.tolist()}")
             direction = tuple(float(v) for v in d / np.linalg.norm(d))
         out.append(Output(name, node, direction, t.number("scale", 1.0)))
-        t.done(["name", *_SELECTORS, "component", "direction", "scale"])
+        t.done(["name", "type", *_SELECTORS, "component", "direction", "scale"])
     return out
 
 
-def _build_reference(t: _Table, folder: Path, outputs: list[Output]) -> Reference:
+def _build_reference(t: _Table, folder: Path, outputs: list, dynamic: bool = False) -> Reference:
     from flexbody.scenes.reference import read_csv_file
     path = Path(t.string("file"))
     path = path if path.is_absolute() else folder / path
@@ -485,9 +615,10 @@ def _build_reference(t: _Table, folder: Path, outputs: list[Output]) -> Referenc
     except (OSError, ValueError) as exc:
         raise SceneError(f"{t.where}: reference.file: {exc}") from None
     header = list(cols)
-    lf_col = t.string("load_factor", header[0])
+    abscissa = "time" if dynamic else "load_factor"
+    lf_col = t.string(abscissa, header[0])
     if lf_col not in cols:
-        raise t.error("load_factor", f"names no column of {str(path)!r}, got {lf_col!r}; columns: {', '.join(header)}")
+        raise t.error(abscissa, f"names no column of {str(path)!r}, got {lf_col!r}; columns: {', '.join(header)}")
     names = [o.name for o in outputs]
     if t.has("columns"):
         mapping = t.table("columns")
@@ -503,7 +634,7 @@ def _build_reference(t: _Table, folder: Path, outputs: list[Output]) -> Referenc
             raise SceneError(f"{t.where}: reference.file {str(path)!r} has no column named like an output "
                              f"({', '.join(names)}); map them with reference.columns = {{output = \"column\"}}")
     source = t.string("source", comments[0] if comments else str(path))
-    t.done(["file", "load_factor", "columns", "source"])
+    t.done(["file", abscissa, "columns", "source"])
     return Reference(np.asarray(cols[lf_col]), {n: np.asarray(cols[c]) for n, c in columns.items()}, source)
 
 
@@ -534,14 +665,23 @@ def scene_from_document(doc: dict, path: str | Path) -> Scene:
     body = _wrap(where, "element", ShellBody, mesh, material, tying=tying, kernel=kernel)
     constraints = _build_bcs(top.tables("bc"), mesh)
     loads = _build_loads(top.tables("load"), mesh)
-    if not loads:
-        raise SceneError(f"{where}: a scene needs at least one [[load]]")
+    dynamic = _analysis_type(doc, where) == "dynamic"
+    if dynamic and not material.density > 0:
+        raise SceneError(f"{where}: material.density must be > 0 for a dynamic analysis, got {material.density!r}")
+    if not loads and not dynamic:
+        raise SceneError(f"{where}: a static scene needs at least one [[load]]")
+    hub = _hub_nodes(doc.get("analysis"), mesh, where) if dynamic else None
+    if hub is not None:
+        from flexbody.constraints import Fix
+        constraints.append(Fix(hub, "all"))          # the hub nodes are clamped to the hub
     model = _wrap(where, "bc/load", Model, body, constraints, loads)
-    analysis = _build_analysis(top.table("analysis", {}))
-    outputs = _build_outputs(top.tables("output"), mesh)
+    at = top.table("analysis", {})
+    analysis = _build_dynamic_analysis(at, body, hub) if dynamic else _build_analysis(at)
+    outputs = _build_outputs(top.tables("output"), mesh, dynamic)
     if not outputs:
         raise SceneError(f"{where}: a scene needs at least one [[output]]")
-    reference = _build_reference(top.table("reference"), folder, outputs) if top.has("reference") else None
+    reference = (_build_reference(top.table("reference"), folder, outputs, dynamic) if top.has("reference")
+                 else None)
     return Scene(name, description, model, analysis, outputs, reference, flatten(doc))
 
 

@@ -18,20 +18,34 @@ from flexbody.shell.geometry import (EVAL_DN, EVAL_N, GAUSS_OFFSET, MEMBRANE_MAP
                                      ElementGeometry)
 from flexbody.shell.kinematics import (NDOF, covariant_strains, measures_jacobian, point_kinematics,
                                        relative_rotations, second_variation, strain_gradient, strain_hessian)
-from flexbody.shell.mitc6 import N_TYING
+from flexbody.shell.mitc6 import DEFAULT_SCHEME, MEMBRANE_SCHEMES, N_TYING
 
 MEMBRANE, BENDING, SHEAR = slice(0, 3), slice(3, 6), slice(6, 8)
 
 
-def assumed_strain_maps(tying: bool) -> np.ndarray:
-    """A (7, 8, 17, 8): covariant strains at Gauss point g = sum A[g, :, p, :] e[p] over evaluation points."""
+def _scheme(tying: bool | str) -> str | None:
+    """The membrane scheme of a ``tying`` argument: True -> the default, a scheme name, False -> None."""
+    if isinstance(tying, str):
+        if tying not in MEMBRANE_SCHEMES:
+            raise ValueError(f"tying must be True, False or one of {MEMBRANE_SCHEMES}, got {tying!r}")
+        return tying
+    return DEFAULT_SCHEME if tying else None
+
+
+def assumed_strain_maps(tying: bool | str) -> np.ndarray:
+    """A (7, 8, 17, 8): covariant strains at Gauss point g = sum A[g, :, p, :] e[p] over evaluation points.
+
+    tying : True (MITC6 with the default membrane scheme), a scheme of ``mitc6.MEMBRANE_SCHEMES``
+    ("mean", "point"), or False (plain displacement-based strains).
+    """
+    scheme = _scheme(tying)
     n_eval = N_TYING + N_GAUSS
     A = np.zeros((N_GAUSS, 8, n_eval, 8))
     for g in range(N_GAUSS):
         gp = GAUSS_OFFSET + g
         A[g, BENDING, gp, BENDING] = np.eye(3)
-        if tying:
-            A[g, MEMBRANE, :N_TYING, MEMBRANE] = MEMBRANE_MAPS[g]
+        if scheme is not None:
+            A[g, MEMBRANE, :, MEMBRANE] = MEMBRANE_MAPS[scheme][g]
             A[g, SHEAR, :N_TYING, SHEAR] = SHEAR_MAPS[g]
         else:
             A[g, MEMBRANE, gp, MEMBRANE] = np.eye(3)
@@ -39,7 +53,12 @@ def assumed_strain_maps(tying: bool) -> np.ndarray:
     return A
 
 
-_MAPS = {True: assumed_strain_maps(True), False: assumed_strain_maps(False)}
+_MAPS = {s: assumed_strain_maps(s) for s in (False, *MEMBRANE_SCHEMES)}
+
+
+def _maps(tying: bool | str) -> np.ndarray:
+    scheme = _scheme(tying)
+    return _MAPS[False if scheme is None else scheme]
 
 
 def element_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, tying: bool = True) -> np.ndarray:
@@ -47,7 +66,7 @@ def element_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, ty
     d_nodes = relative_rotations(frames)
     e = np.array([covariant_strains(point_kinematics(x, frames, d_nodes, N, dN).F)
                   for N, dN in zip(EVAL_N, EVAL_DN)]) - geom.e_ref
-    cov = np.einsum("gipj,pj->gi", _MAPS[tying], e)
+    cov = np.einsum("gipj,pj->gi", _maps(tying), e)
     return np.einsum("gij,gj->gi", geom.to_cart, cov)
 
 
@@ -60,9 +79,10 @@ def internal_force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeome
     x : (6, 3) nodal positions; frames : (6, 3, 3) nodal frames R_I
     geom : reference data from :func:`flexbody.shell.geometry.element_geometry`
     section : (8, 8) Cartesian section stiffness (``ShellMaterial.section()``)
-    tying : MITC6 assumed strains on (True) or plain displacement-based strains (False)
+    tying : MITC6 assumed strains on (True, or a membrane scheme name, see :func:`assumed_strain_maps`)
+             or plain displacement-based strains (False)
     """
-    A = _MAPS[tying]
+    A = _maps(tying)
     d_nodes = relative_rotations(frames)
     kin, e, B = [], [], []
     for N, dN in zip(EVAL_N, EVAL_DN):

@@ -23,7 +23,10 @@ N_GAUSS = len(GAUSS_POINTS)
 GAUSS_OFFSET = mitc6.N_TYING
 EVAL_N = np.array([shape_functions(r, s) for r, s in EVAL_POINTS])
 EVAL_DN = np.array([shape_derivatives(r, s) for r, s in EVAL_POINTS])
-MEMBRANE_MAPS = np.array([mitc6.membrane_map(r, s) for r, s in GAUSS_POINTS])  # (7, 3, 10, 3)
+assert np.array_equal(EVAL_POINTS[GAUSS_OFFSET:], mitc6._GAUSS_POINTS) and len(EVAL_POINTS) == mitc6.N_EVAL
+#: Membrane maps per scheme (mitc6.MEMBRANE_SCHEMES), over all evaluation points: (7, 3, 17, 3) each.
+MEMBRANE_MAPS = {scheme: np.array([mitc6.membrane_map(r, s, scheme) for r, s in GAUSS_POINTS])
+                 for scheme in mitc6.MEMBRANE_SCHEMES}
 SHEAR_MAPS = np.array([mitc6.shear_map(r, s) for r, s in GAUSS_POINTS])        # (7, 2, 10, 2)
 
 

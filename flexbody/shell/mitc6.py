@@ -6,14 +6,31 @@ linear map: ``assumed(r, s) = M(r, s) @ sampled`` with the samples taken at ``TY
 Covariant components on the reference triangle (r, s); q runs along the hypotenuse, direction (-1, 1)/sqrt 2:
     e_qq = (e_rr - 2 e_rs + e_ss) / 2,    e_rs = (e_rr + e_ss)/2 - e_qq       (paper Eq. 27)
     e_qt = (e_st - e_rt) / sqrt 2
-Membrane: each of e_rr, e_ss, e_qq is the linear field through its three tying values.
+Membrane: each of e_rr, e_ss, e_qq is a linear field tied at the two Gauss stations of its edge plus one
+interior condition (see the schemes below).
 Transverse shear, MITC6a (8 parameters, a rotated Raviart-Thomas field):
     e_rt = a1 + b1 r + c1 s + s (d r + e s),   e_st = a2 + b2 r + c2 s - r (d r + e s).
+
+Two membrane schemes (``MEMBRANE_SCHEMES``; docs/locking.md has the measurements):
+
+* ``"mean"`` (default): each linear field passes through its two edge stations, and its element mean (its
+  value at the centroid) equals the element mean of the displacement-based strain (``MEAN_RULE``, exact for
+  the quadratic strains of a curved quadratic element in the linear range). Edge stations plus one interior
+  moment instead of an interior point value: the moment form of the tying. It removes most of the
+  membrane locking of curved elements (thin hemisphere) and is identical to ``"point"`` on flat elements
+  in the linear range (there the strains are linear and both reproduce them exactly).
+* ``"point"``: the third value is a point value at the interior tying point (r1, 1/sqrt 3) etc. (the reading
+  of Lee & Bathe 2004 in /work/shared/reference/README.md). Locks for thin curved shells.
+
+The membrane maps refer to all evaluation points of the element (tying points, then the Gauss points of
+:func:`flexbody.shell.shape.gauss_triangle_7`, the layout of ``flexbody.shell.geometry.EVAL_POINTS``).
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from flexbody.shell.shape import gauss_triangle_7
 
 R1 = 0.5 - 0.5 / np.sqrt(3.0)  # edge Gauss stations (paper Eq. 28)
 R2 = 0.5 + 0.5 / np.sqrt(3.0)
@@ -22,13 +39,26 @@ C3 = 1.0 / np.sqrt(3.0)
 #: The distinct tying points, (r, s). Indices below refer to rows of this array.
 TYING_POINTS = np.array(
     [
-        (R1, 0.0), (R2, 0.0), (R1, C3),      # 0-2: e_rr
+        (R1, 0.0), (R2, 0.0), (R1, C3),      # 0-2: e_rr (the interior point: "point" scheme only)
         (0.0, R1), (0.0, R2), (C3, R1),      # 3-5: e_ss
         (R2, R1), (R1, R2), (R1, R1),        # 6-8: e_qq (hypotenuse x2, interior)
         (1.0 / 3.0, 1.0 / 3.0),              # 9: centroid (shear)
     ]
 )
 N_TYING = len(TYING_POINTS)
+
+_GAUSS_POINTS, _GAUSS_WEIGHTS = gauss_triangle_7()
+#: Evaluation points: the tying points, then the Gauss points (their indices are N_TYING + g).
+N_EVAL = N_TYING + len(_GAUSS_POINTS)
+#: Element mean of a sampled field: 1/12 at each of the six edge stations, 1/2 at the centroid. Exact for
+#: quadratics (the membrane strains of a curved quadratic element in the linear range), positive, and it
+#: only uses points that the shear tying samples anyway (cheaper in the kernel than the 7 Gauss points,
+#: which give the same results to four digits on the benchmarks).
+MEAN_RULE = {0: 1 / 12, 1: 1 / 12, 3: 1 / 12, 4: 1 / 12, 6: 1 / 12, 7: 1 / 12, 9: 1 / 2}
+
+#: Membrane tying schemes; the first is the default.
+MEMBRANE_SCHEMES = ("mean", "point")
+DEFAULT_SCHEME = MEMBRANE_SCHEMES[0]
 
 _RR_POINTS = (0, 1, 2)
 _SS_POINTS = (3, 4, 5)
@@ -41,27 +71,48 @@ def _linear_basis(points: np.ndarray, r: float, s: float) -> np.ndarray:
     return np.linalg.solve(vander.T, np.array([1.0, r, s]))
 
 
-def membrane_map(r: float, s: float) -> np.ndarray:
+def _edge_mean_weights(edge: tuple[int, int], r: float, s: float) -> np.ndarray:
+    """Weights [v1, v2, mean] of the linear field with values v1, v2 at two edge stations and mean ``mean``."""
+    rows = [[1.0, *TYING_POINTS[k]] for k in edge] + [[1.0, 1.0 / 3.0, 1.0 / 3.0]]  # mean = centroid value
+    return np.linalg.solve(np.array(rows).T, np.array([1.0, r, s]))
+
+
+def membrane_map(r: float, s: float, scheme: str = DEFAULT_SCHEME) -> np.ndarray:
     """Assumed membrane strains [e_rr, e_ss, e_rs] at (r, s) from the samples.
 
     Returns
     -------
-    M : (3, N_TYING, 3) array with assumed[i] = sum_kj M[i, k, j] sampled[k, j], where
-        sampled[k] = [e_rr, e_ss, e_rs] computed at TYING_POINTS[k].
+    M : (3, N_EVAL, 3) array with assumed[i] = sum_kj M[i, k, j] sampled[k, j], where
+        sampled[k] = [e_rr, e_ss, e_rs] computed at evaluation point k (tying points, then Gauss points).
     """
-    m = np.zeros((3, N_TYING, 3))
-    w_rr = _linear_basis(TYING_POINTS[list(_RR_POINTS)], r, s)
-    w_ss = _linear_basis(TYING_POINTS[list(_SS_POINTS)], r, s)
-    w_qq = _linear_basis(TYING_POINTS[list(_QQ_POINTS)], r, s)
+    if scheme not in MEMBRANE_SCHEMES:
+        raise ValueError(f"membrane scheme must be one of {MEMBRANE_SCHEMES}, got {scheme!r}")
+    m = np.zeros((3, N_EVAL, 3))
     qq_of_sample = np.array([0.5, 0.5, -1.0])  # e_qq = (e_rr + e_ss)/2 - e_rs
-    for w, k in zip(w_rr, _RR_POINTS):
-        m[0, k, 0] += w
-    for w, k in zip(w_ss, _SS_POINTS):
-        m[1, k, 1] += w
+    if scheme == "point":
+        w_rr = _linear_basis(TYING_POINTS[list(_RR_POINTS)], r, s)
+        w_ss = _linear_basis(TYING_POINTS[list(_SS_POINTS)], r, s)
+        w_qq = _linear_basis(TYING_POINTS[list(_QQ_POINTS)], r, s)
+        for w, k in zip(w_rr, _RR_POINTS):
+            m[0, k, 0] += w
+        for w, k in zip(w_ss, _SS_POINTS):
+            m[1, k, 1] += w
+        qq = np.zeros((N_EVAL, 3))
+        for w, k in zip(w_qq, _QQ_POINTS):
+            qq[k] += w * qq_of_sample
+    else:
+        fields = []
+        for edge, sample in ((_RR_POINTS[:2], np.eye(3)[0]), (_SS_POINTS[:2], np.eye(3)[1]),
+                             (_QQ_POINTS[:2], qq_of_sample)):
+            w = _edge_mean_weights(edge, r, s)
+            f = np.zeros((N_EVAL, 3))
+            f[list(edge)] += w[:2, None] * sample
+            for k, wk in MEAN_RULE.items():
+                f[k] += w[2] * wk * sample
+            fields.append(f)
+        m[0], m[1], qq = fields
     # e_rs = (e_rr + e_ss)/2 - e_qq, all three assumed fields evaluated at (r, s)
-    m[2] = 0.5 * (m[0] + m[1])
-    for w, k in zip(w_qq, _QQ_POINTS):
-        m[2, k, :] -= w * qq_of_sample
+    m[2] = 0.5 * (m[0] + m[1]) - qq
     return m
 
 
