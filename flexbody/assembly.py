@@ -203,6 +203,16 @@ class Model:
     def initial_state(self) -> ShellState:
         return self.body.initial_state()
 
+    def warm_up(self) -> None:
+        """Compile (or load from cache) every numba kernel a solve uses, on a single element and node."""
+        from flexbody.lie.kernels import update_frames_into
+        self.body.warm_up()
+        blocks = np.zeros((1, 36, 36))
+        maps = np.tile(np.eye(3), (1, 6, 1, 1))
+        scatter_blocks(blocks, maps, maps, -np.ones((1, 36, 36), dtype=np.int64), 1.0, np.zeros(1))
+        frames = np.ascontiguousarray(self.body.frames0[:1])
+        update_frames_into(frames, np.zeros((1, 2)), frames.copy())
+
     # -- evaluation --------------------------------------------------------------------------------------
     def _external_local(self, state: ShellState):
         """Local external force (n, 6), its nodal tangent blocks (n, 6, 6) and pressure element blocks."""

@@ -125,6 +125,19 @@ class ShellBody:
                 K[e] = Ke
         return f, K
 
+    def warm_up(self) -> None:
+        """Compile (or load from numba's cache) the element kernels on one element, so that the first real
+        evaluation and the timings of a run do not include compilation."""
+        if self.kernel != "numba":
+            return
+        from flexbody.shell.element import internal_force_tangent_batch
+        conn = self.mesh.elements[:1]
+        ref = self.reference
+        args = (self.mesh.nodes[conn].astype(float), self.frames0[conn], ref.e_ref[:1], ref.to_cart[:1],
+                ref.weights[:1], self.material.section(), self._maps)
+        internal_force_tangent_batch(*args, True)
+        internal_force_tangent_batch(*args, False)
+
     def strain_energy(self, state: ShellState) -> float:
         from flexbody.shell.element_reference import strain_energy
         from flexbody.shell.geometry import ElementGeometry

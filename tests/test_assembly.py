@@ -77,3 +77,14 @@ def test_unknown_node_is_rejected():
     body = ShellBody(mesh, ShellMaterial(1e4, 0.3, 0.05), kernel="reference")
     with pytest.raises(ModelError, match="node 999"):
         Model(body, [Fix([999], "all")])
+
+
+def test_warm_up_compiles_without_changing_anything():
+    mesh = generators.strip(2.0, 1.0, 2, 1)
+    body = ShellBody(mesh, ShellMaterial(1e4, 0.3, 0.05))
+    model = Model(body, [Fix(mesh.node_set("clamped"), "all")], [NodalLoad(mesh.node_set("tip"), force=[0, 0, 1.0])])
+    state = model.initial_state()
+    r0 = model.residual(state, 0.5)
+    model.warm_up()
+    np.testing.assert_array_equal(model.residual(state, 0.5), r0)
+    np.testing.assert_array_equal(model.initial_state().frames, state.frames)

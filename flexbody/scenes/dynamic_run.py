@@ -276,6 +276,7 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
             progress(rec)
 
     with kernel_threads(a.threads, model.body.mesh.n_elements):
+        model.warm_up()  # numba compilation is not run time
         t0 = time.perf_counter()
         p, L = dyn.momenta(state, v0)
         first = DynamicStepRecord(0, 0.0, 0, [], [], 0, 1, dyn.kinetic_energy(v0), dyn.strain_energy(state),

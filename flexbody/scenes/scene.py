@@ -294,6 +294,7 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
         if progress is not None:
             progress(rec)
 
+    model.warm_up()  # numba compilation is not run time
     t0 = time.perf_counter()
     a = scene.analysis
     if a.method == "load_control":
