@@ -2,10 +2,13 @@
 step, nearly incompressible material, a sharp snap-back under arc-length.
 
     python benchmarks/stress.py [--quick] [--out docs/robustness_results.md] [CASE ...]
+    python benchmarks/stress.py --dynamic [--quick] [CASE ...]      # the thin spinning membrane, large dt
 
 Prints one row per case: what was checked, the measured figure, pass or fail. ``--quick`` skips the slow
-cases (those the test suite does not run). The fast cases also run in tests/test_stress.py, through the
-functions of this file. The table and its discussion are in docs/robustness.md.
+cases (those the test suite does not run). The fast cases also run in tests/test_stress.py and
+tests/test_stress_dynamics.py, through the functions of this file. ``--dynamic`` runs the dynamic cases (a
+very thin membrane spinning fast, time steps 10-1000 times the explicit limit, rho_inf from 0 to 1) instead
+of the static ones. The table and its discussion are in docs/robustness.md.
 """
 
 from __future__ import annotations
@@ -278,6 +281,295 @@ def case_snap_back() -> Row:
                "" if s.result.converged else s.result.message)
 
 
+# -- dynamics: a very thin membrane spinning fast, time steps far above the explicit limit --------------------
+# Annulus a = 0.5 .. b = 1 m (or a hexagon of circumradius 1 m), h = 1e-4 (h/L = 1e-4), E = 1e9, nu = 0.3,
+# rho = 1000. The explicit (central-difference) limit is dt_crit = 2 / omega_max of the lumped-mass model;
+# the multiples below are of the translational (membrane) limit, 2 / omega_max of M^-1/2 K M^-1/2 restricted
+# to the translations (7.1e-5 s on the 2x2x16 annulus; the estimate l_min / c, c = sqrt(E / (rho (1 - nu^2))),
+# gives 9.4e-5 s). With the rotary inertia rho h^3 / 12 the full model's limit is ~1000x smaller still
+# (6.4e-8 s: the transverse-shear / director mode, omega^2 ~ 12 k G / (rho h^2)).
+THIN = dict(inner=0.5, outer=1.0, young=1e9, nu=0.3, rho=1000.0, thickness=1e-4)
+
+
+def thin_membrane(shape: str = "annulus", drive: str = "free", n_radial: int = 2, n_circ: int = 16,
+                  n_rings: int = 3):
+    """The thin membrane: (DynamicModel, mesh, None) free (drive = "free"), or (Model, mesh, hub nodes) with
+    the inner edge (annulus) / the central ring of elements (hexagon) clamped, for a DynamicModel with the
+    hub's PrescribedMotion (:func:`spin_up_motion`; it depends on omega and the ramp)."""
+    from flexbody.dynamics import DynamicModel
+    p = THIN
+    if shape == "annulus":
+        mesh = generators.annulus(p["inner"], p["outer"], n_radial, n_circ)
+        hub = mesh.node_set("inner")
+    elif shape == "hexagon":
+        mesh = generators.regular_polygon(6, p["outer"], n_rings)
+        # the innermost ring of elements (hexagon of circumradius outer / n_rings) is the hub
+        k = np.arange(6)
+        normals = np.stack([np.cos((2 * k + 1) * np.pi / 6), np.sin((2 * k + 1) * np.pi / 6)], axis=1)
+        gauge = (mesh.nodes[:, :2] @ normals.T).max(axis=1) / (p["outer"] * math.cos(math.pi / 6))
+        hub = np.flatnonzero(gauge <= 1.0 / n_rings + 1e-9)
+    else:
+        raise ValueError(f"shape must be 'annulus' or 'hexagon', got {shape!r}")
+    body = ShellBody(mesh, ShellMaterial(p["young"], p["nu"], p["thickness"], density=p["rho"]))
+    if drive == "free":
+        return DynamicModel(Model(body)), mesh, None
+    return Model(body, [Fix(hub, "all")]), mesh, hub
+
+
+def explicit_limits(dyn) -> dict:
+    """The central-difference limits 2 / omega_max of the lumped-mass model at its reference state:
+    ``membrane`` (translational DoFs only), ``full`` (with the director DoFs), and the estimate
+    ``estimate`` = l_min / c with l_min the smallest distance between two nodes of an element."""
+    import scipy.sparse as sp
+    s = dyn.model.initial_state()
+    _, K = dyn.residual_and_tangent(s, np.zeros(dyn.n_dof), 0.0)
+    K = 0.5 * (K + K.T)
+    m = sp.diags(1.0 / np.sqrt(dyn.mass))
+    A = (m @ K @ m).toarray()
+    tr = dyn.is_translation
+    w_full = math.sqrt(max(np.linalg.eigvalsh(A).max(), 0.0))
+    w_mem = math.sqrt(max(np.linalg.eigvalsh(A[np.ix_(tr, tr)]).max(), 0.0))
+    mesh = dyn.model.body.mesh
+    x = mesh.nodes[mesh.elements]                                          # (e, 6, 3)
+    d = np.linalg.norm(x[:, :, None, :] - x[:, None, :, :], axis=-1)
+    l_min = d[d > 0].min()
+    p = THIN
+    c = math.sqrt(p["young"] / (p["rho"] * (1 - p["nu"] ** 2)))
+    return dict(membrane=2.0 / w_mem, full=2.0 / w_full, estimate=l_min / c, omega_membrane=w_mem,
+                omega_full=w_full)
+
+
+_LIMITS: dict = {}
+
+
+def membrane_dt_crit(shape: str = "annulus") -> dict:
+    """:func:`explicit_limits` of the free thin membrane (cached per shape)."""
+    if shape not in _LIMITS:
+        dyn, _, _ = thin_membrane(shape)
+        _LIMITS[shape] = explicit_limits(dyn)
+    return _LIMITS[shape]
+
+
+def rotating_annulus_displacement(r, omega: float, inner: str = "free") -> np.ndarray:
+    """Radial displacement of the plane-stress annulus THIN spinning steadily at omega (Timoshenko & Goodier):
+    u = C1 r + C2 / r - k r^3, k = (1 - nu^2) rho omega^2 / (8 E); sigma_r(b) = 0 and sigma_r(a) = 0
+    (``inner="free"``) or u(a) = 0 (``inner="hub"``); sigma_r = 0 reads (1 + nu) C1 - (1 - nu) C2 / r^2 =
+    (3 + nu) k r^2."""
+    p = THIN
+    a, b, nu = p["inner"], p["outer"], p["nu"]
+    k = (1 - nu**2) * p["rho"] * omega**2 / (8 * p["young"])
+    rows = [[1 + nu, -(1 - nu) / b**2], [1 + nu, -(1 - nu) / a**2] if inner == "free" else [a, 1.0 / a]]
+    rhs = [(3 + nu) * k * b**2, (3 + nu) * k * a**2 if inner == "free" else k * a**3]
+    C1, C2 = np.linalg.solve(np.array(rows), rhs)
+    r = np.asarray(r, dtype=float)
+    return C1 * r + C2 / r - k * r**3
+
+
+def spin_up_motion(omega: float, ramp: float):
+    """t -> (Q(t), 0): a hub spun up about z from rest to omega, omega(t) = omega (1 - cos(pi t / ramp)) / 2
+    during the ramp, constant after it."""
+    def angle(t):
+        if t < ramp:
+            return omega * (t / 2 - ramp / (2 * np.pi) * np.sin(np.pi * t / ramp))
+        return omega * (ramp / 2 + t - ramp)
+
+    def motion(t):
+        return so3.exp(np.array([0.0, 0.0, angle(t)])), np.zeros(3)
+    return motion
+
+
+def _one_thread():
+    """The element kernel on one numba thread (these meshes have 54-64 elements: thread start-up would
+    dominate); returns the previous count."""
+    import numba
+    n = numba.get_num_threads()
+    numba.set_num_threads(1)
+    return n
+
+
+@dataclass
+class SpinRun:
+    """Measured figures of one run of a spinning membrane."""
+
+    converged: bool
+    message: str
+    steps: int
+    iterations: int
+    factorizations: int
+    substeps: int
+    energy_growth: float        # max over the records of (E - E0) / E0
+    energy_change: float        # (E_end - E0) / E0
+    momentum_drift: float       # max |L - L0| / |L0|
+    spin_ratio: float           # fitted rigid spin rate at the end / omega
+    z_max: float                # max |z| of the nodes at the recorded steps (out-of-plane motion)
+    stretch_error: float        # hub: co-rotating outer-edge radial displacement vs the analytic one (relative)
+    energy_spread: float        # hub: ptp(E) / E over the steady phase
+    dt: float
+    seconds: float
+
+
+def spin_run(dt_multiple: float, rho_inf: float, *, drive: str = "free", shape: str = "annulus",
+             omega: float = 20.0, t_end: float = 0.5, ramp: float = 0.2, tilt: float | None = None,
+             max_cutbacks: int = 0, n_circ: int = 16, start: str = "stretched") -> SpinRun:
+    """The thin membrane at dt = dt_multiple x the membrane's explicit limit, generalized-alpha at rho_inf.
+
+    drive = "free": released with the rigid spin field omega about z plus an out-of-plane
+    velocity tilt * omega * r cos(2 theta) (so that the nearly bendless membrane must keep its plane by its
+    centrifugal tension alone; a perfectly flat start would never leave it). Energy and angular momentum are
+    conserved by the exact solution. ``start = "stretched"`` (annulus): the nodes start at the steady
+    stretch of the plane-stress rotating annulus (free edges), a nearly steady spin, so that a large step
+    meets the long-term spin; ``start = "unstressed"``: released from the reference geometry, the start-up
+    transient (the membrane must stretch within a fraction of a breathing period, ~3 ms) inside the
+    first step. drive = "hub": the inner edge (annulus) or the central ring (hexagon)
+    clamped and spun up from rest to omega in ``ramp``; the same out-of-plane velocity field, 10x smaller,
+    is given to the free nodes at rest (tilt default 1e-3 free, 1e-4 hub: the membrane at rest has no
+    tension to hold it, and a larger wobble would foreshorten the measured stretch). Checked in the steady phase: the co-rotating outer-edge stretch against the rotating
+    annulus on a rigid hub (annulus only) and the energy spread.
+    """
+    from flexbody.dynamics import DynamicModel, PrescribedMotion
+    from integrators.generalized_alpha import AlphaSettings, generalized_alpha
+    threads = _one_thread()
+    try:
+        t0 = time.perf_counter()
+        dt = dt_multiple * membrane_dt_crit(shape)["membrane"]
+        obj, mesh, hub = thin_membrane(shape, drive, n_circ=n_circ)
+        if drive == "free":
+            dyn = obj
+        else:
+            dyn = DynamicModel(obj, prescribed=[PrescribedMotion(hub, spin_up_motion(omega, ramp))])
+        s = dyn.model.initial_state()
+        if drive == "free" and shape == "annulus" and start == "stretched":
+            R0 = np.linalg.norm(s.x[:, :2], axis=1)
+            u = rotating_annulus_displacement(R0, omega, "free")
+            s = s.copy()
+            s.x[:, :2] *= (1.0 + u / R0)[:, None]
+        elif start != "unstressed" and not (drive == "hub" and start == "stretched"):
+            raise ValueError(f"start must be 'stretched' (free annulus only) or 'unstressed', got {start!r}")
+        if tilt is None:
+            tilt = 1e-3 if drive == "free" else 1e-4
+        r = np.linalg.norm(s.x[:, :2], axis=1)
+        theta = np.arctan2(s.x[:, 1], s.x[:, 0])
+        spin = np.array([0.0, 0.0, omega]) if drive == "free" else np.zeros(3)
+        xdot = np.cross(spin, s.x)
+        xdot[:, 2] += tilt * omega * r * np.cos(2 * theta)
+        v = dyn.velocity_from_nodal(s, xdot, np.tile(spin, (len(s.x), 1)))
+        hist = []
+
+        def on_step(rec, q, vel):
+            hist.append((rec.time, rec.total_energy, float(np.abs(q.x[:, 2]).max())))
+
+        out = generalized_alpha(dyn, t_end, dt, state=s, velocity=v, on_step=on_step,
+                                settings=AlphaSettings(rho_inf=rho_inf, max_cutbacks=max_cutbacks))
+        recs = [out.initial] + out.records
+        E = np.array([rec.total_energy for rec in recs])
+        L = np.array([rec.angular_momentum for rec in recs])
+        E0 = E[0]
+        z_max = max([abs(s.x[:, 2]).max()] + [z for _, _, z in hist])
+        nan = float("nan")
+        stretch_error = spread = nan
+        spin_ratio = nan
+        if drive == "free":
+            growth, change = (E.max() - E0) / E0, (E[-1] - E0) / E0
+            drift = float(np.abs(L - L[0]).max() / np.linalg.norm(L[0]))
+            if out.records:
+                spin_ratio = float(dyn.rigid_angular_velocity(out.state, out.velocity)[2] / omega)
+        else:
+            growth = change = drift = nan
+            steady = np.array([e for t, e, _ in hist if t >= ramp + 0.5 * (t_end - ramp)])
+            if out.converged and steady.size:
+                spread = float(np.ptp(steady) / steady.mean())
+            if out.converged and shape == "annulus":
+                Q, _ = spin_up_motion(omega, ramp)(out.time)
+                outer = mesh.node_set("outer")
+                X = mesh.nodes[outer]
+                u = np.linalg.norm((out.state.x[outer] @ Q)[:, :2], axis=1) - np.linalg.norm(X[:, :2], axis=1)
+                exact = float(rotating_annulus_displacement(THIN["outer"], omega, "hub"))
+                stretch_error = float(u.mean() / exact - 1.0)
+        return SpinRun(out.converged, out.message, len(out.records), out.stats.iterations,
+                       out.stats.factorizations, sum(rec.substeps for rec in out.records), float(growth),
+                       float(change), float(drift), spin_ratio, float(z_max), stretch_error, spread, dt,
+                       time.perf_counter() - t0)
+    finally:
+        import numba
+        numba.set_num_threads(threads)
+
+
+# pass criteria of the dynamic rows
+ENERGY_GROWTH_MAX = 1e-3     # free spin: E(t) <= (1 + 1e-3) E0 at every step (no blow-up, no spurious energy)
+ENERGY_LOSS_MAX = 5e-2       # free spin: E_end >= 0.95 E0 (numerical dissipation of the spin itself)
+MOMENTUM_DRIFT_MAX = 5e-2    # free spin: |L - L0| <= 5 % |L0|
+Z_MAX = 1e-2                 # out-of-plane motion stays below 1 % of the radius (it starts at ~6e-4)
+STRETCH_MAX = 0.05           # hub: co-rotating outer-edge stretch within 5 % of the rotating-annulus value
+SPREAD_MAX = 1e-2            # hub: energy spread in the second half of the steady spin
+
+
+def spin_passed(run: SpinRun, drive: str) -> bool:
+    if not run.converged or not np.isfinite(run.z_max) or run.z_max > Z_MAX:
+        return False
+    if drive == "free":
+        return (run.energy_growth <= ENERGY_GROWTH_MAX and run.energy_change >= -ENERGY_LOSS_MAX
+                and run.momentum_drift <= MOMENTUM_DRIFT_MAX)
+    ok = not (run.energy_spread > SPREAD_MAX)
+    return ok and not (abs(run.stretch_error) > STRETCH_MAX)
+
+
+def case_spin(dt_multiple: float, rho_inf: float, drive: str = "free", shape: str = "annulus",
+              omega: float = 20.0, **kw) -> Row:
+    """One row: :func:`spin_run` and its pass criteria (module constants above)."""
+    run = spin_run(dt_multiple, rho_inf, drive=drive, shape=shape, omega=omega, **kw)
+    h_omega = run.dt * omega
+    if drive == "free":
+        how = "free spin, " + ("steady stretch" if kw.get("start", "stretched") == "stretched" else "released unstressed")
+    else:
+        how = "hub spin-up"
+    cut = f", max_cutbacks = {kw['max_cutbacks']}" if kw.get("max_cutbacks") else ""
+    label = (f"thin {shape} h/L = 1e-4, {how}, {omega:g} rad/s, dt = {dt_multiple:g} dt_crit ({run.dt:.2e} s, "
+             f"h omega = {h_omega:.2g}), rho_inf = {rho_inf:g}{cut}")
+    if drive == "free":
+        checked = (f"converges; E <= (1 + {ENERGY_GROWTH_MAX:g}) E0, E_end >= {1 - ENERGY_LOSS_MAX:g} E0; "
+                   f"dL/L0 <= {MOMENTUM_DRIFT_MAX:g}; z_max <= {Z_MAX:g} m")
+        acc = (f"energy growth {run.energy_growth:.1e}, change {run.energy_change:+.2e}; dL/L0 "
+               f"{run.momentum_drift:.2e}; spin {run.spin_ratio:.4f} omega")
+    else:
+        checked = (f"converges; steady-phase energy spread <= {SPREAD_MAX:g}; outer stretch vs rotating annulus "
+                   f"on a hub within {100 * STRETCH_MAX:g} %; z_max <= {Z_MAX:g} m")
+        acc = (f"energy spread {run.energy_spread:.1e}; stretch error {100 * run.stretch_error:+.2f} %"
+               if shape == "annulus" else f"energy spread {run.energy_spread:.1e}")
+    per = run.iterations / max(run.substeps, 1)
+    figure = (f"{acc}; z_max {run.z_max:.1e} m; {run.steps} steps, {per:.1f} it/step, "
+              f"{run.factorizations} factorizations" + (f", {run.substeps} sub-steps" if run.substeps > run.steps else ""))
+    if not run.converged:
+        figure = f"stopped after {run.steps} steps: {run.message[:160]}; {figure}"
+    ok = spin_passed(run, drive)
+    return Row(label, checked, figure, ok, run.seconds, "" if run.converged else run.message[:300])
+
+
+U = dict(start="unstressed")
+DYNAMIC_CASES = {
+    # the sweep: released unstressed (the membrane must stretch within the first step), 0.5 s = 1.6 turns
+    "spin_free": (lambda: [case_spin(m, rho, **U) for m in (10, 100) for rho in (0.0, 0.5, 0.8, 1.0)], False),
+    # where the fixed step stops converging, and what cut-backs (max_cutbacks = 4) make of it
+    "spin_free_limits": (lambda: [case_spin(20, 1.0, **U), case_spin(50, 1.0, **U), case_spin(300, 0.8, **U),
+                                  case_spin(1000, 0.8, **U), case_spin(300, 0.0, max_cutbacks=4, **U),
+                                  case_spin(300, 0.8, max_cutbacks=4, **U), case_spin(1000, 0.8, max_cutbacks=4, **U)],
+                         True),
+    # started in the steady stretch of the rotating annulus (no breathing)
+    "spin_free_stretched": (lambda: [case_spin(10, 0.8), case_spin(100, 0.8), case_spin(100, 0.8, max_cutbacks=4)],
+                            True),
+    # five times faster (strain ~4e-3): 0.2 s = 3.2 turns
+    "spin_fast": (lambda: [case_spin(m, rho, omega=100.0, t_end=0.2, **U) for m, rho in ((10, 0.0), (10, 0.8), (10, 1.0),
+                                                                                         (100, 0.8))]
+                  + [case_spin(10, 0.8, omega=100.0, t_end=0.2)], True),
+    # spun up by a hub from rest in 0.2 s, held to 0.5 s
+    "spin_hub": (lambda: [case_spin(m, rho, "hub") for m, rho in ((10, 0.8), (100, 0.0), (100, 0.8), (100, 1.0),
+                                                                   (1000, 0.8))], False),
+    # the hexagonal sail (54 elements, 6 sectors x 3^2; its dt_crit is 1.09e-4 s)
+    "spin_hexagon": (lambda: [case_spin(10, 0.8, "free", "hexagon", **U), case_spin(50, 0.8, "free", "hexagon", **U),
+                              case_spin(100, 0.8, "free", "hexagon", **U), case_spin(10, 0.8, "hub", "hexagon"),
+                              case_spin(50, 0.8, "hub", "hexagon"), case_spin(100, 0.8, "hub", "hexagon")], True),
+}
+
+
 CASES = {
     "thickness": (lambda: [case_thickness(h) for h in (1e-1, 1e-2, 1e-3, 1e-4, 1e-5)], True),
     "hemisphere_thickness": (lambda: case_hemisphere_thickness(), True),
@@ -302,16 +594,25 @@ def table(rows: list[Row]) -> str:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("cases", nargs="*", help=f"cases to run (default all): {', '.join(CASES)}")
+    ap.add_argument("cases", nargs="*", help=f"cases to run (default all static ones): {', '.join(CASES)}; "
+                    f"dynamic: {', '.join(DYNAMIC_CASES)}")
     ap.add_argument("--quick", action="store_true", help="skip the slow cases")
+    ap.add_argument("--dynamic", action="store_true", help="run the dynamic cases (thin spinning membrane, "
+                    "large time steps) instead of the static ones")
     ap.add_argument("--out", help="also write the table to this Markdown file")
     a = ap.parse_args(argv)
-    unknown = [c for c in a.cases if c not in CASES]
+    every = {**CASES, **DYNAMIC_CASES}
+    unknown = [c for c in a.cases if c not in every]
     if unknown:
-        ap.error(f"unknown case(s) {unknown}; choose from {', '.join(CASES)}")
+        ap.error(f"unknown case(s) {unknown}; choose from {', '.join(every)}")
     rows = []
-    for name in a.cases or CASES:
-        run, slow = CASES[name]
+    if a.dynamic and not a.cases:
+        lim = membrane_dt_crit("annulus")
+        print(f"thin annulus (2x2x16, h = 1e-4): explicit limit dt_crit = 2 / omega_max = {lim['membrane']:.3e} s "
+              f"(translations; l_min / c = {lim['estimate']:.3e} s); with the director DoFs {lim['full']:.3e} s",
+              flush=True)
+    for name in a.cases or (DYNAMIC_CASES if a.dynamic else CASES):
+        run, slow = every[name]
         if a.quick and slow and not a.cases:
             continue
         for row in run():

@@ -226,6 +226,7 @@ class GeneralizedAlpha:
         if out[0] is None and not out[-1]:   # failed with an old matrix: retry with a fresh one
             out = self._attempt(q_n, v_n, vdot_n, a_n, t_n, fresh=True)
         if out[0] is None:
+            self.solver = LinearSolver()  # the failed attempt's matrix belongs to a wild iterate: never reuse it
             raise _StepFailure(out[1])
         return out[:-1]
 
