@@ -48,6 +48,17 @@ def _curved_mesh(what: str, hint: str, *args, **kwargs) -> Tri6Mesh:
         raise MeshError(f"{what}: the cells are too coarse for the curvature ({exc}); {hint}") from None
 
 
+def _sector_angle(angle, n_circ: int, what: str) -> tuple[float, bool]:
+    """The opening angle of a surface of revolution, checked, and whether it closes (2 pi)."""
+    angle = _check_length(angle, "angle")
+    if angle > 2 * math.pi + 1e-12:
+        raise MeshError(f"angle must be at most 2 pi, got {angle}")
+    full = abs(angle - 2 * math.pi) < 1e-12
+    if full and n_circ < 2:
+        raise MeshError(f"a full {what} needs n_circ >= 2")
+    return angle, full
+
+
 def _grid_triangles(nu: int, nv: int, diagonal: str, periodic_v: bool) -> np.ndarray:
     """Connectivity (2 nu nv, 6) on the (2 nu + 1) x (2 nv + 1) point grid, index = i (2 nv + 1) + j."""
     if diagonal not in _DIAGONALS:
@@ -185,12 +196,7 @@ def cylinder(radius: float, length: float, n_circ: int, n_axial: int, angle: flo
     """
     R, length = _check_length(radius, "radius"), _check_length(length, "length")
     nc, na = _check_count(n_circ, "n_circ"), _check_count(n_axial, "n_axial")
-    angle = _check_length(angle, "angle")
-    if angle > 2 * math.pi + 1e-12:
-        raise MeshError(f"angle must be at most 2 pi, got {angle}")
-    full = abs(angle - 2 * math.pi) < 1e-12
-    if full and nc < 2:
-        raise MeshError("a full cylinder needs n_circ >= 2")
+    angle, full = _sector_angle(angle, nc, "cylinder")
 
     def surface(z, a):
         x = np.stack([R * np.cos(a), R * np.sin(a), z], axis=1)
@@ -226,12 +232,7 @@ def spherical_cap(radius: float, hole_deg: float, n_meridian: int, n_circ: int, 
     if not hole < pmax < 180.0:
         raise MeshError(f"need 0 < hole_deg < polar_max_deg < 180, got {hole_deg} and {polar_max_deg}")
     nm, nc = _check_count(n_meridian, "n_meridian"), _check_count(n_circ, "n_circ")
-    angle = _check_length(angle, "angle")
-    if angle > 2 * math.pi + 1e-12:
-        raise MeshError(f"angle must be at most 2 pi, got {angle}")
-    full = abs(angle - 2 * math.pi) < 1e-12
-    if full and nc < 2:
-        raise MeshError("a full spherical cap needs n_circ >= 2")
+    angle, full = _sector_angle(angle, nc, "spherical cap")
 
     def surface(p, a):
         n = np.stack([np.sin(p) * np.cos(a), np.sin(p) * np.sin(a), np.cos(p)], axis=1)

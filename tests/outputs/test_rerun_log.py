@@ -12,24 +12,7 @@ import pytest
 
 from flexbody.lie import so3
 from flexbody.outputs.rerun_log import colormap, display_triangles
-
-
-REPO = Path(__file__).resolve().parents[2]
-
-
-def run_python(code: str) -> subprocess.CompletedProcess:
-    """Run ``code`` in a fresh interpreter that imports flexbody from this checkout."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
-    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env)
-
-
-def square_mesh():
-    """Stand-in for a Tri6Mesh: the unit square as two six-node triangles on a 3 x 3 grid of nodes."""
-    jj, ii = np.meshgrid(np.arange(3), np.arange(3), indexing="ij")
-    nodes = np.stack([0.5 * ii.ravel(), 0.5 * jj.ravel(), np.zeros(9)], axis=1)
-    elements = np.array([[0, 2, 8, 1, 5, 4], [0, 8, 6, 4, 7, 3]])
-    directors = np.tile([0.0, 0.0, 1.0], (9, 1))
-    return SimpleNamespace(nodes=nodes, elements=elements, directors=directors)
+from tests.outputs.common import REPO, run_python, square_mesh
 
 
 def states(mesh, k):
