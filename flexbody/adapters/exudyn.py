@@ -1,4 +1,4 @@
-"""exudyn reference models of the built-in static scenes, and the side-by-side comparison.
+"""exudyn reference models of the built-in scenes, and the side-by-side comparison.
 
 exudyn has no triangular or shear-deformable shell. The matching models used here are
 
@@ -7,7 +7,12 @@ exudyn has no triangular or shear-deformable shell. The matching models used her
   ``ObjectANCFThinPlate`` (four-node Kirchhoff plate, ``exudyn.shells.ShellMesh``);
 - ``slit_annular_plate``, ``pullout_cylinder`` and ``hemisphere``: ``ObjectANCFThinPlate`` on a mapped
   rectangle (``ShellMesh(surfaceMap=...)``), symmetry planes as coordinate constraints on the nodal
-  position and slope coordinates.
+  position and slope coordinates;
+- the dynamic ``spinning_plate``: a free ``ObjectANCFThinPlate`` mesh started in the scene's rigid spin
+  (position and slope rates of the rigid field), exudyn's ``GeneralizedAlpha`` with the scene's spectral
+  radius, time step and end time (``build_dynamic_model``, ``solve_dynamic``); angular momentum from the
+  nodal coordinates and the consistent mass matrix, strain energy integrated from exudyn's elastic forces
+  (exudyn has no energy output for the plate); optionally an RK4 (``RK44``) reference run of the same model.
 
 The physics is read from the flexbody scene itself: material (E, nu, h), geometry (from the mesh nodes),
 total loads (from the scene's nodal loads) and the load factors of the analysis; tracked outputs are the
@@ -17,7 +22,9 @@ at equal distance, e.g. the two tip corners of a one-element-wide plate strip).
 Options of the exudyn model ride along in the scene parameters with the prefix ``exudyn_`` (and are removed
 before the flexbody scene is built): ``exudyn_model`` ("beam3d", "beam2d" or "plate" for the strips,
 "plate" otherwise), ``exudyn_nx``, ``exudyn_ny`` (element counts), ``exudyn_steps`` (uniform load steps,
-used where the flexbody scene runs arc-length), ``exudyn_rtol`` (exudyn's relative Newton tolerance).
+used where the flexbody scene runs arc-length), ``exudyn_rtol`` (exudyn's relative Newton tolerance);
+for dynamic scenes ``exudyn_energy_every`` (strain energy at every k-th recorded step), ``exudyn_reference``
+("rk4": add the RK4 run), ``exudyn_reference_dt`` (1e-4) and ``exudyn_reference_end_time``.
 
 ``ShellODE2`` puts our shell into an exudyn system as an ``ObjectGenericODE2`` (force and Jacobian user
 functions; with the lumped mass also for exudyn's implicit integrators), so that exudyn constraints and
@@ -51,7 +58,7 @@ from flexbody.body import ShellState, update_state
 from flexbody.lie.so3 import tangent
 from flexbody.loads import NodalLoad
 from flexbody.scenes import build
-from flexbody.scenes.scene import Scene, compare_with_reference, run_scene
+from flexbody.scenes.scene import DynamicAnalysis, Scene, compare_with_reference, run_scene
 
 #: exudyn models available for each built-in scene; the first is the default
 MODELS: dict[str, tuple[str, ...]] = {
@@ -60,6 +67,7 @@ MODELS: dict[str, tuple[str, ...]] = {
     "slit_annular_plate": ("plate",),
     "pullout_cylinder": ("plate",),
     "hemisphere": ("plate",),
+    "spinning_plate": ("plate",),
 }
 
 #: exudyn relative Newton tolerance per model kind and scene (see the module docstring)
@@ -67,7 +75,8 @@ _RTOL = {"beam3d": 1e-10, "beam2d": 1e-10, "plate": 1e-8}
 _RTOL_SCENE = {"slit_annular_plate": 1e-6, "pullout_cylinder": 1e-6, "hemisphere": 1e-5}
 
 _OPTION_PREFIX = "exudyn_"
-_OPTIONS = ("model", "nx", "ny", "steps", "rtol")
+_DYNAMIC_OPTIONS = ("energy_every", "reference", "reference_dt", "reference_end_time")
+_OPTIONS = ("model", "nx", "ny", "steps", "rtol") + _DYNAMIC_OPTIONS
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -549,7 +558,7 @@ def _default_mesh(scene: Scene, kind: str) -> tuple[int, int]:
     if scene.name in ("cantilever_end_moment", "cantilever_end_shear"):
         return (2 * p["nx"], 1) if kind.startswith("beam") else (p["nx"], p["ny"])
     keys = {"slit_annular_plate": ("n_radial", "n_circ"), "pullout_cylinder": ("n_circ", "n_axial"),
-            "hemisphere": ("n_circ", "n_meridian")}[scene.name]
+            "hemisphere": ("n_circ", "n_meridian"), "spinning_plate": ("nx", "ny")}[scene.name]
     return p[keys[0]], p[keys[1]]
 
 
@@ -573,6 +582,8 @@ def build_model(scene: Scene, options: dict | None = None) -> ExudynModel:
     """
     options = dict(options or {})
     kind = model_kind(scene.name, options)
+    if isinstance(scene.analysis, DynamicAnalysis):
+        raise ValueError(f"scene {scene.name!r} is dynamic: use build_dynamic_model")
     nx0, ny0 = _default_mesh(scene, kind)
     nx, ny = int(options.get("nx", nx0)), int(options.get("ny", ny0))
     if nx < 1 or ny < 1:
@@ -668,6 +679,516 @@ def run_reference(scene_name: str, params: dict | None = None) -> ExudynRun:
 
 
 # ----------------------------------------------------------------------------------------------------------
+# dynamics: the spinning plate with the ANCF plate
+# ----------------------------------------------------------------------------------------------------------
+
+#: dynamic scenes with an exudyn model (``compare`` runs them through ``_compare_dynamic``)
+DYNAMIC_SCENES = ("spinning_plate",)
+
+
+@dataclass(frozen=True)
+class RadialOutput:
+    """A ``RadialDisplacement`` of the flexbody scene in exudyn: the mean over ANCF nodes of
+    |P (x - c)| - |P (X - c)| (P: projection normal to ``axis``), times ``scale``.
+
+    indices : (k, 3) ODE2 indices of the position coordinates of the k nodes
+    positions : (k, 3) their reference positions
+    """
+
+    name: str
+    indices: np.ndarray
+    positions: np.ndarray
+    center: np.ndarray
+    axis: np.ndarray
+    scale: float = 1.0
+
+    def value(self, u: np.ndarray) -> float:
+        n = self.axis / np.linalg.norm(self.axis)
+
+        def radius(x):
+            r = x - self.center
+            return np.linalg.norm(r - np.outer(r @ n, n), axis=1)
+
+        x = self.positions + u[self.indices]
+        return self.scale * float(np.mean(radius(x) - radius(self.positions)))
+
+
+@dataclass
+class ExudynDynamicModel:
+    """An assembled exudyn system that mirrors a dynamic flexbody scene (free ANCF plate, rigid spin).
+
+    Attributes
+    ----------
+    reference : ODE2 reference coordinates (positions and unit slopes of the NodePointSlope12 nodes)
+    mass : the (constant) ODE2 mass matrix, dense; the ANCF plate's is ``scalar_mass`` (x) I_3
+    scalar_mass : the mass matrix of the scalar shape functions (one row per nodal 3-vector)
+    angular_velocity, velocity : the initial rigid field v = velocity + angular_velocity x X
+    time_step, end_time, rho_inf : of the flexbody analysis (exudyn's generalized-alpha takes the same)
+    records : (t, u, u_t) per recorded step, filled by the pre-step user function during a solve
+    """
+
+    scene: str
+    kind: str
+    description: str
+    system_container: object
+    mbs: object
+    outputs: list[RadialOutput]
+    reference: np.ndarray
+    mass: np.ndarray
+    scalar_mass: np.ndarray
+    angular_velocity: np.ndarray
+    velocity: np.ndarray
+    time_step: float
+    end_time: float
+    rho_inf: float
+    elements: int
+    build_time_s: float = 0.0
+    record_every: int = 1
+    records: list = field(default_factory=list)
+    element_numbers: list = field(default_factory=list)
+
+    @property
+    def coordinates(self) -> int:
+        return int(self.mbs.systemData.ODE2Size())
+
+    def angular_momentum(self, u: np.ndarray, u_t: np.ndarray) -> np.ndarray:
+        """L = int rho r x v dV about the origin: sum_AB M_AB q_A x q_B' (q_A: nodal 3-vectors, absolute)."""
+        q = (self.reference + u).reshape(-1, 3)
+        return np.cross(q, self.scalar_mass @ np.asarray(u_t).reshape(-1, 3)).sum(axis=0)
+
+    def kinetic_energy(self, u_t: np.ndarray) -> float:
+        return 0.5 * float(u_t @ self.mass @ u_t)
+
+
+def _rigid_field(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """(v0, omega) of the scene's initial velocity field v = v0 + omega x X (raises if it is not rigid)."""
+    a = scene.analysis
+    X = scene.model.body.mesh.nodes
+    if a.initial_state is not None or a.prescribed or a.load_factor is not None or scene.model.loads:
+        raise ValueError(f"scene {scene.name!r}: only free, unloaded bodies with a rigid initial velocity "
+                         "field have an exudyn counterpart")
+    v = np.zeros_like(X) if a.initial_velocity is None else np.asarray(a.initial_velocity, float)
+    w_nodes = np.zeros_like(X) if a.initial_angular_velocity is None else np.asarray(a.initial_angular_velocity, float)
+    w = w_nodes.mean(axis=0)
+    v0 = (v - np.cross(w, X)).mean(axis=0)
+    scale = max(float(np.abs(v).max()), 1e-300)
+    if (np.abs(w_nodes - w).max() > 1e-9 * max(float(np.abs(w).max()), 1e-300)
+            or np.abs(v0 + np.cross(w, X) - v).max() > 1e-9 * scale):
+        raise ValueError(f"scene {scene.name!r}: the initial velocity is not a rigid field v0 + omega x X")
+    return v0, w
+
+
+def spinning_plate_model(scene: Scene, nx: int, ny: int) -> tuple:
+    """The free flat plate as ANCF thin plates (nx x ny), started with the scene's rigid velocity field.
+
+    ANCF interpolates rigid motions exactly, so the rigid field is set exactly on the nodal coordinates:
+    position rates v0 + omega x X, slope rates omega x (slope). Returns (sc, mbs, outputs, description,
+    elements, v0, omega).
+    """
+    x = scene.model.body.mesh.nodes
+    if np.ptp(x[:, 2]) > 0:
+        raise ValueError(f"scene {scene.name!r} is not a flat plate in a plane z = const")
+    (x0, y0, z0), (x1, y1, _) = x.min(axis=0), x.max(axis=0)
+    v0, w = _rigid_field(scene)
+    sc, mbs = _new_system()
+    mesh = _plate_mesh(mbs, scene, [[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0]], nx, ny)
+    for node in mesh.nodeNumbers:
+        ref = np.asarray(mbs.GetNodeParameter(node, "referenceCoordinates"), float)
+        rates = np.concatenate([v0 + np.cross(w, ref[:3]), np.cross(w, ref[3:6]), np.cross(w, ref[6:9])])
+        mbs.SetNodeParameter(node, "initialVelocities", rates.tolist())
+    positions = np.array(mesh.nodeReferencePositions, float)
+    size = float(np.ptp(x, axis=0).max())
+    outputs = []
+    for out in scene.outputs:
+        if not hasattr(out, "center") or not hasattr(out, "nodes"):
+            raise ValueError(f"scene {scene.name!r}: output {out.name!r} has no exudyn counterpart "
+                             "(radial displacements only)")
+        idx = sorted({int(i) for n in out.nodes for i in _nearest(positions, x[n], size)})
+        outputs.append((out, [mesh.nodeNumbers[i] for i in idx], positions[idx]))
+    return (sc, mbs, outputs, f"ObjectANCFThinPlate, {nx} x {ny} elements, free", nx * ny, v0, w,
+            list(mesh.elementNumbers))
+
+
+def _record_step(model: ExudynDynamicModel):
+    """Pre-step user function: store (t, u, u_t) at the start of every ``record_every``-th step."""
+    h = model.time_step
+
+    def pre(mbs, t):
+        start = float(t) - h                         # exudyn passes the step's end time
+        k = int(round(start / h))
+        if k % model.record_every == 0 and (not model.records or start > model.records[-1][0] + 0.5 * h):
+            sd = mbs.systemData
+            model.records.append((start, np.array(sd.GetODE2Coordinates()), np.array(sd.GetODE2Coordinates_t())))
+        return True
+    return pre
+
+
+def build_dynamic_model(scene: Scene, options: dict | None = None, time_step: float | None = None,
+                        end_time: float | None = None) -> ExudynDynamicModel:
+    """Build and assemble the exudyn model of a dynamic scene (``spinning_plate``: free ANCF plate).
+
+    time_step, end_time : default the flexbody analysis' (an RK4 reference run passes its own)
+    options : nx, ny (default one ANCF quad per flexbody cell)
+    """
+    options = dict(options or {})
+    kind = model_kind(scene.name, options)
+    a = scene.analysis
+    nx0, ny0 = _default_mesh(scene, kind)
+    nx, ny = int(options.get("nx", nx0)), int(options.get("ny", ny0))
+    if nx < 1 or ny < 1:
+        raise ValueError(f"exudyn_nx and exudyn_ny must be >= 1, got {nx} and {ny}")
+    t_end = float(a.end_time if end_time is None else end_time)
+    h = t_end / a.n_steps if time_step is None else float(time_step)
+    if not (h > 0 and t_end > 0):
+        raise ValueError(f"time step and end time must be positive, got {h!r} and {t_end!r}")
+    h = t_end / max(1, int(math.ceil(t_end / h - 1e-9)))
+    t0 = time.perf_counter()
+    sc, mbs, raw_outputs, description, elements, v0, w, element_numbers = spinning_plate_model(scene, nx, ny)
+    model = ExudynDynamicModel(scene.name, kind, description, sc, mbs, [], np.zeros(0), np.zeros((0, 0)),
+                               np.zeros((0, 0)), w, v0, h, t_end, float(a.rho_inf), elements,
+                               record_every=max(1, int(a.output_every)), element_numbers=element_numbers)
+    mbs.SetPreStepUserFunction(_record_step(model))
+    mbs.Assemble()
+    sd = mbs.systemData
+    model.reference = np.asarray(sd.GetODE2Coordinates(configuration=exu.ConfigurationType.Reference), float)
+    for out, nodes, positions in raw_outputs:
+        indices = np.array([list(sd.GetNodeLTGODE2(n))[:3] for n in nodes], dtype=int)
+        model.outputs.append(RadialOutput(out.name, indices, positions, np.asarray(out.center, float),
+                                          np.asarray(out.axis, float), float(out.scale)))
+    solver = exu.MainSolverStatic()
+    print_to_console = exu.config.printToConsole
+    exu.config.printToConsole = False
+    try:
+        s = _dynamic_settings(model, "generalized_alpha")
+        solver.InitializeSolver(mbs, s)
+        solver.ComputeMassMatrix(mbs)
+        model.mass = np.array(solver.GetSystemMassMatrix(), float)
+        solver.FinalizeSolver(mbs, s)
+    finally:
+        exu.config.printToConsole = print_to_console
+    model.scalar_mass = model.mass[0::3, 0::3].copy()
+    if np.abs(model.mass - np.kron(model.scalar_mass, np.eye(3))).max() > 1e-12 * np.abs(model.mass).max():
+        raise ValueError("the ANCF mass matrix is not (scalar mass) x I_3; the angular momentum formula needs it")
+    model.build_time_s = time.perf_counter() - t0
+    return model
+
+
+def _dynamic_settings(model: ExudynDynamicModel, integrator: str):
+    s = exu.SimulationSettings()
+    ti = s.timeIntegration
+    ti.numberOfSteps = int(round(model.end_time / model.time_step))
+    ti.endTime = model.end_time
+    ti.verboseMode = 0
+    if integrator == "generalized_alpha":
+        ti.generalizedAlpha.spectralRadius = model.rho_inf
+    else:
+        ti.explicit.computeEndOfStepAccelerations = False
+    s.solution.file.write = False
+    s.linearSolver.solverType = exu.LinearSolverType.EigenSparse
+    return s
+
+
+def strain_energies(model: ExudynDynamicModel, displacements: list[np.ndarray], method: str = "exudyn",
+                    points: int = 4) -> np.ndarray:
+    """Strain energy of each displacement u (ODE2 coordinates). Overwrites the system's current
+    coordinates (call it after the run).
+
+    method "exudyn": the sum of exudyn's ``PotentialEnergy`` body output of every ANCF plate element
+    (``GetObjectOutputBody``; the element's strain energy, the local position is not used).
+    method "forces": an independent check, W(u) = int_0^1 f_int(s u) . u ds, integrated from exudyn's
+    elastic forces (the ODE2 right-hand side, -f_int, of the free unloaded system) along the straight path
+    from the reference configuration with ``points`` Gauss-Legendre points in s: exact for any path
+    (f_int is conservative) up to the quadrature; the membrane forces are cubic polynomials in u (Green
+    strains), which 4 points integrate exactly.
+    """
+    mbs = model.mbs
+    if method == "exudyn":
+        kind = exu.OutputVariableType.PotentialEnergy
+        out = []
+        for u in displacements:
+            mbs.systemData.SetODE2Coordinates(np.asarray(u, float).tolist())
+            out.append(sum(float(np.ravel(mbs.GetObjectOutputBody(e, kind, [0.0, 0.0, 0.0]))[0])
+                           for e in model.element_numbers))
+        return np.array(out)
+    if method != "forces":
+        raise ValueError(f"method must be 'exudyn' or 'forces', got {method!r}")
+    s_pts, s_w = np.polynomial.legendre.leggauss(points)
+    s_pts, s_w = (s_pts + 1) / 2, s_w / 2
+    solver = exu.MainSolverStatic()
+    settings = _dynamic_settings(model, "generalized_alpha")
+    print_to_console = exu.config.printToConsole
+    exu.config.printToConsole = False
+    try:
+        solver.InitializeSolver(mbs, settings)
+        out = []
+        for u in displacements:
+            energy = 0.0
+            for s, wt in zip(s_pts, s_w):
+                mbs.systemData.SetODE2Coordinates((s * u).tolist())
+                solver.ComputeODE2RHS(mbs)
+                energy -= wt * float(np.asarray(solver.GetSystemResidual()) @ u)
+            out.append(energy)
+        solver.FinalizeSolver(mbs, settings)
+    finally:
+        exu.config.printToConsole = print_to_console
+    return np.array(out)
+
+
+def solve_dynamic(model: ExudynDynamicModel, integrator: str = "generalized_alpha", energy_every: int = 1) -> dict:
+    """Run exudyn's time integration of the model; record outputs, energies and the angular momentum.
+
+    integrator : "generalized_alpha" (implicit, ``DynamicSolverType.GeneralizedAlpha`` with the scene's
+        spectral radius) or "rk4" (explicit ``RK44``, for a reference at a small step)
+    energy_every : evaluate the strain energy at every k-th recorded state (it costs ``points`` force
+        evaluations each; the kinetic energy and momentum are taken at every recorded state)
+
+    Returns the run dict (``_compare_dynamic`` documents the keys). A failing solver
+    (``exu.SolverError``) gives converged = False and the records up to the failure.
+    """
+    if integrator not in ("generalized_alpha", "rk4"):
+        raise ValueError(f"integrator must be 'generalized_alpha' or 'rk4', got {integrator!r}")
+    mbs = model.mbs
+    model.records.clear()
+    settings = _dynamic_settings(model, integrator)
+    solver_type = exu.DynamicSolverType.GeneralizedAlpha if integrator == "generalized_alpha" else \
+        exu.DynamicSolverType.RK44
+    converged, message = True, "completed"
+    print_to_console = exu.config.printToConsole
+    exu.config.printToConsole = False
+    t0, c0 = time.perf_counter(), time.process_time()
+    try:
+        mbs.SolveDynamic(settings, solverType=solver_type, storeSolver=True, showHints=False)
+    except exu.SolverError as exc:
+        converged, message = False, f"exudyn SolverError: {str(exc).splitlines()[0]}"
+    finally:
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        exu.config.printToConsole = print_to_console
+    sd = mbs.systemData
+    t_reached = float(sd.GetTime())
+    if converged:
+        if abs(t_reached - model.end_time) > 1e-9 * max(1.0, model.end_time):
+            converged, message = False, f"exudyn stopped at t = {t_reached:.6g}"
+        elif not model.records or model.end_time > model.records[-1][0] + 0.5 * model.time_step:
+            model.records.append((model.end_time, np.array(sd.GetODE2Coordinates()),
+                                  np.array(sd.GetODE2Coordinates_t())))
+    solver = mbs.sys.get("dynamicSolver")
+    iterations = int(solver.it.newtonStepsCount) if solver is not None else 0
+    jacobians = int(solver.it.newtonJacobiCount) if solver is not None else 0
+    times = [r[0] for r in model.records]
+    history = {"time": times}
+    for out in model.outputs:
+        history[out.name] = [out.value(r[1]) for r in model.records]
+    L = np.array([model.angular_momentum(r[1], r[2]) for r in model.records]).reshape(-1, 3)
+    kinetic = np.array([model.kinetic_energy(r[2]) for r in model.records])
+    every = max(1, int(energy_every))
+    picked = [k for k in range(len(model.records)) if k % every == 0 or k == len(model.records) - 1]
+    e0 = time.perf_counter()
+    strain = strain_energies(model, [model.records[k][1] for k in picked]) if picked else np.zeros(0)
+    energy_time = time.perf_counter() - e0
+    t_strain = np.array([times[k] for k in picked])
+    total = kinetic[picked] + strain
+    L_scale = float(np.linalg.norm(L, axis=1).max()) if len(L) else float("nan")
+    L_drift = float(np.linalg.norm(L - L[0], axis=1).max()) if len(L) else float("nan")
+    e_scale = float(np.max(kinetic[picked] + strain)) if picked else float("nan")
+    name = "GeneralizedAlpha" if integrator == "generalized_alpha" else "RK44"
+    return {
+        "model": model.description + f", exudyn {name}", "kind": model.kind, "integrator": integrator,
+        "dofs": model.coordinates, "coordinates": model.coordinates, "elements": model.elements,
+        "steps": int(round(t_reached / model.time_step)), "time_step": model.time_step,
+        "end_time": model.end_time, "rho_inf": model.rho_inf if integrator == "generalized_alpha" else None,
+        "newton_iterations": iterations, "jacobians": jacobians, "converged": converged, "message": message,
+        "time": t_reached, "build_time_s": model.build_time_s, "wall_time_s": wall, "cpu_time_s": cpu,
+        "energy_eval_time_s": energy_time,
+        "outputs": {k: v[-1] for k, v in history.items() if k != "time" and v},
+        "history": history,
+        "energy_history": {"time": t_strain.tolist(), "kinetic": kinetic[picked].tolist(),
+                           "strain": strain.tolist(), "total": total.tolist()},
+        "kinetic_history": {"time": times, "kinetic": kinetic.tolist()},
+        "momentum": {"angular": {"initial": L[0].tolist() if len(L) else None,
+                                 "final": L[-1].tolist() if len(L) else None, "max_drift": L_drift,
+                                 "max_rel_drift": L_drift / L_scale if L_scale > 0 else float("nan"),
+                                 "history": L.tolist()}},
+        "energy": _energy_summary(t_strain, strain, total, e_scale),
+    }
+
+
+def _energy_summary(t, strain, total, scale) -> dict:
+    t, strain, total = np.asarray(t, float), np.asarray(strain, float), np.asarray(total, float)
+    later = t > 0
+    drift = float(np.abs(total - total[0]).max()) if total.size else float("nan")
+    return {"strain": {"max": float(strain.max()) if strain.size else float("nan"),
+                       "min": float(strain[later].min()) if later.any() else float("nan"),
+                       "mean": float(strain[later].mean()) if later.any() else float("nan"),
+                       "final": float(strain[-1]) if strain.size else float("nan")},
+            "total": {"initial": float(total[0]) if total.size else float("nan"), "max_drift": drift,
+                      "max_rel_drift": drift / scale if scale and scale > 0 else float("nan")}}
+
+
+def _flexbody_dynamic_dict(scene: Scene, summary, build_time: float, cpu_time: float) -> dict:
+    d = summary.as_dict()
+    eh = d["energy_history"]
+    e = d["energy"]
+    scale = float(np.max(np.asarray(eh["kinetic"]) + np.asarray(eh["strain"]) + np.abs(eh["gravity"])))
+    energy = _energy_summary(eh["time"], eh["strain"], eh["total"], scale)
+    energy["total"]["max_rel_drift"] = e["total"]["max_rel_drift"]
+    L = np.asarray(summary.energies["angular_momentum"], float)
+    angular = dict(d["momentum"]["angular"], history=L.tolist())
+    return {
+        "model": f"flexbody six-node SE(3) shell ({'MITC6' if scene.model.body.tying else 'no tying'}), "
+                 f"{summary.elements} triangles, Lie-group generalized-alpha ({d['policy']})",
+        "dofs": d["dofs"], "elements": d["elements"], "steps": d["steps"], "time_step": d["time_step"],
+        "end_time": d["end_time"], "rho_inf": d["rho_inf"], "newton_iterations": d["newton_iterations"],
+        "tangent_updates": d["tangent_updates"], "factorizations": d["factorizations"],
+        "converged": d["converged"], "message": d["message"], "time": d["time"], "build_time_s": build_time,
+        "wall_time_s": d["wall_time_s"], "cpu_time_s": cpu_time, "outputs": d["outputs"],
+        "history": {k: [float(x) for x in v] for k, v in summary.history.items()},
+        "energy_history": {k: eh[k] for k in ("time", "kinetic", "strain", "total")},
+        "momentum": {"angular": angular}, "energy": energy,
+    }
+
+
+def _history_difference(a: dict, b: dict, name: str, t_max: float | None = None) -> tuple[float, float]:
+    """(max |b - a|, that / max |value| of both) over a's times inside both histories (b interpolated)."""
+    ta, tb = np.asarray(a["time"], float), np.asarray(b["time"], float)
+    if ta.size == 0 or tb.size == 0:
+        return float("nan"), float("nan")
+    hi = min(ta[-1], tb[-1]) if t_max is None else min(ta[-1], tb[-1], t_max)
+    keep = ta <= hi + 1e-12
+    va = np.asarray(a[name], float)[keep]
+    vb = np.interp(ta[keep], tb, np.asarray(b[name], float))
+    diff = float(np.abs(vb - va).max())
+    scale = max(float(np.abs(va).max()), float(np.abs(vb).max())) or 1.0
+    return diff, diff / scale
+
+
+def _samples(runs: dict[str, dict], t_end: float, n: int = 11) -> dict:
+    """The strain (potential) energy of each run at n equidistant times (linear interpolation)."""
+    times = np.linspace(0.0, t_end, n)
+    out = {"time": times.tolist()}
+    for key, run in runs.items():
+        if run is None:
+            continue
+        eh = run["energy_history"]
+        t = np.asarray(eh["time"], float)
+        vals = np.interp(times, t, eh["strain"]) if t.size else np.full(n, np.nan)
+        out[key] = [float(v) if tt <= t[-1] + 1e-12 else None for v, tt in zip(vals, times)] if t.size else \
+            [None] * n
+    return out
+
+
+def _compare_dynamic(scene_name: str, scene_params: dict, options: dict) -> dict:
+    """``compare`` for a dynamic scene (see ``compare``)."""
+    for key in ("steps", "rtol"):
+        if key in options:
+            raise ValueError(f"exudyn option {_OPTION_PREFIX + key} is for static scenes only")
+    reference = options.get("reference")
+    if reference is not None and str(reference).lower() not in ("0", "false", "no", "1", "true", "rk4", "yes"):
+        raise ValueError(f"exudyn_reference must be rk4 (or 1/true, 0/false), got {reference!r}")
+    use_reference = reference is not None and str(reference).lower() not in ("0", "false", "no")
+    t0 = time.perf_counter()
+    scene = build(scene_name, **scene_params)
+    fb_build = time.perf_counter() - t0
+    model = build_dynamic_model(scene, options)
+    scene.model.warm_up()                          # numba compilation is neither wall nor CPU time of the run
+    c0 = time.process_time()
+    summary = run_scene(scene)
+    fb = _flexbody_dynamic_dict(scene, summary, fb_build, time.process_time() - c0)
+    ex = solve_dynamic(model, energy_every=int(options.get("energy_every", 1)))
+    ref = None
+    if use_reference:
+        ref_model = build_dynamic_model(scene, options, time_step=float(options.get("reference_dt", 1e-4)),
+                                        end_time=float(options.get("reference_end_time", model.end_time)))
+        ref_model.record_every = max(1, int(round(model.time_step / ref_model.time_step)))
+        ref = solve_dynamic(ref_model, "rk4", energy_every=int(options.get("energy_every", 1)))
+    rows = []
+    for out in scene.outputs:
+        diff, rel = _history_difference(fb["history"], ex["history"], out.name)
+        row = {"name": out.name, "flexbody": fb["outputs"].get(out.name), "exudyn": ex["outputs"].get(out.name),
+               "max_history_difference": diff, "rel_history_difference": rel}
+        a, b = row["flexbody"], row["exudyn"]
+        row["difference"] = None if a is None or b is None else b - a
+        if ref is not None and ref["history"]["time"]:
+            t_ref = ref["history"]["time"][-1]
+            row["flexbody_vs_rk4"] = _history_difference(ref["history"], fb["history"], out.name, t_ref)[1]
+            row["exudyn_vs_rk4"] = _history_difference(ref["history"], ex["history"], out.name, t_ref)[1]
+        rows.append(row)
+    ratio = ex["wall_time_s"] / fb["wall_time_s"] if fb["wall_time_s"] > 0 else None
+    cpu_ratio = ex["cpu_time_s"] / fb["cpu_time_s"] if fb["cpu_time_s"] > 0 else None
+    ok = bool(fb["converged"] and ex["converged"] and (ref is None or ref["converged"]))
+    return {
+        "scene": scene_name, "kind": "dynamic", "parameters": dict(scene.parameters), "exudyn_options": options,
+        "flexbody": fb, "exudyn": ex, "reference": ref, "outputs": rows,
+        "strain_energy_samples": _samples({"flexbody": fb, "exudyn": ex, "reference": ref}, model.end_time),
+        "reference_source": "exudyn RK44 on the same ANCF model" if ref is not None else None,
+        "wall_time_ratio": ratio, "cpu_time_ratio": cpu_ratio, "ok": ok,
+    }
+
+
+def dynamic_table_lines(result: dict) -> list[str]:
+    """The printed table of a dynamic comparison."""
+    runs = [("flexbody", result["flexbody"]), ("exudyn", result["exudyn"])]
+    if result.get("reference") is not None:
+        runs.append(("exudyn RK4", result["reference"]))
+    lines = [f"scene            {result['scene']} (dynamic)",
+             f"parameters       {result['parameters']}" + (f"  exudyn {result['exudyn_options']}"
+                                                            if result["exudyn_options"] else "")]
+    lines += [f"{label:17}{run['model']}" for label, run in runs]
+    lines.append("")
+    w = 14
+    lines.append(f"{'':28}" + "".join(f"{label:>{w}}" for label, _ in runs))
+
+    def row(label, get, spec):
+        vals = []
+        for _, run in runs:
+            try:
+                vals.append(_fmt(get(run), spec))
+            except (KeyError, TypeError, IndexError):
+                vals.append("-")
+        lines.append(f"{label:28}" + "".join(f"{v:>{w}}" for v in vals))
+
+    row("DoFs (coordinates)", lambda r: r["dofs"], "d")
+    row("time step", lambda r: r["time_step"], ".3g")
+    row("steps", lambda r: r["steps"], "d")
+    row("end time", lambda r: r["time"], ".4g")
+    row("Newton iterations", lambda r: r["newton_iterations"], "d")
+    row("build time [s]", lambda r: r["build_time_s"], ".3f")
+    row("solve time [s]", lambda r: r["wall_time_s"], ".3f")
+    row("solve CPU time [s]", lambda r: r["cpu_time_s"], ".3f")
+    row("L_z(0)", lambda r: r["momentum"]["angular"]["initial"][2], ".6g")
+    row("L_z(end)", lambda r: r["momentum"]["angular"]["final"][2], ".6g")
+    row("angular momentum drift", lambda r: r["momentum"]["angular"]["max_rel_drift"], ".2e")
+    row("strain energy max", lambda r: r["energy"]["strain"]["max"], ".5g")
+    row("strain energy min (t > 0)", lambda r: r["energy"]["strain"]["min"], ".5g")
+    row("strain energy mean (t > 0)", lambda r: r["energy"]["strain"]["mean"], ".5g")
+    row("total energy drift", lambda r: r["energy"]["total"]["max_rel_drift"], ".2e")
+    row("converged", lambda r: str(r["converged"]), "")
+    lines.append("")
+    samples = result["strain_energy_samples"]
+    lines.append("strain (potential) energy history")
+    keys = [k for k in ("flexbody", "exudyn", "reference") if k in samples]
+    lines.append(f"{'t':>8}" + "".join(f"{k if k != 'reference' else 'exudyn RK4':>{w}}" for k in keys))
+    for i, t in enumerate(samples["time"]):
+        lines.append(f"{t:8.3f}" + "".join(f"{_fmt(samples[k][i]):>{w}}" for k in keys))
+    lines.append("")
+    head = f"{'output':14}{'flexbody':>12}{'exudyn':>12}{'difference':>12}{'max hist. diff':>16}{'rel.':>10}"
+    has_ref = result.get("reference") is not None
+    if has_ref:
+        head += f"{'fb vs RK4':>11}{'ex vs RK4':>11}"
+    lines.append(head)
+    for r in result["outputs"]:
+        line = (f"{r['name']:14}{_fmt(r['flexbody']):>12}{_fmt(r['exudyn']):>12}{_fmt(r['difference'], '.3e'):>12}"
+                f"{_fmt(r['max_history_difference'], '.3e'):>16}{_fmt(r['rel_history_difference'], '.2e'):>10}")
+        if has_ref:
+            line += f"{_fmt(r.get('flexbody_vs_rk4'), '.2e'):>11}{_fmt(r.get('exudyn_vs_rk4'), '.2e'):>11}"
+        lines.append(line)
+    lines.append("(max hist. diff: over the recorded times, exudyn interpolated; rel.: / max |value| of both)")
+    for label, run in runs:
+        if not run["converged"]:
+            lines.append(f"{label}: {run['message']}")
+    return lines
+
+
+# ----------------------------------------------------------------------------------------------------------
 # comparison
 # ----------------------------------------------------------------------------------------------------------
 
@@ -730,9 +1251,33 @@ def compare(scene_name: str, params: dict | None = None) -> dict:
         over the table, or None);
         "reference_source", "wall_time_ratio" and "cpu_time_ratio" (exudyn / flexbody, solve only),
         "ok" (both converged).
+
+    A dynamic scene (``DYNAMIC_SCENES``: ``spinning_plate``) returns instead the keys
+        "scene", "kind" ("dynamic"), "parameters", "exudyn_options";
+        "flexbody" and "exudyn" (and "reference", the optional RK4 run of the same exudyn model with
+        ``exudyn_reference=rk4``, ``exudyn_reference_dt`` (1e-4), ``exudyn_reference_end_time``, else
+        None): model, dofs, elements, steps, time_step, end_time, rho_inf, newton_iterations, converged,
+        message, time (reached), build_time_s, wall_time_s, cpu_time_s, outputs (final), history (time and
+        every output per recorded step), energy_history (time, kinetic, strain, total),
+        momentum["angular"] (initial, final, max_drift, max_rel_drift = max_t |L(t) - L(0)| / max_t |L|,
+        history; about the origin), energy (strain max / min / mean over t > 0, final; total initial,
+        max_drift, max_rel_drift); flexbody adds tangent_updates and factorizations, exudyn
+        jacobians, energy_eval_time_s (the strain-energy post-processing, not in the solve time);
+        "outputs": per output name, flexbody, exudyn, difference (final), max_history_difference and
+        rel_history_difference (over the recorded times, / max |value| of both), with a reference also
+        flexbody_vs_rk4 and exudyn_vs_rk4 (relative history differences over the reference window);
+        "strain_energy_samples": time and the strain energy of each run at 11 equidistant times;
+        "reference_source", "wall_time_ratio", "cpu_time_ratio", "ok".
+    The exudyn option ``exudyn_energy_every`` evaluates exudyn's strain energy at every k-th recorded step.
     """
     scene_params, options = split_options(params)
     model_kind(scene_name, options)                # fail before the (possibly long) flexbody build
+    if scene_name in DYNAMIC_SCENES:
+        return _compare_dynamic(scene_name, scene_params, options)
+    dynamic_only = sorted(set(options) & set(_DYNAMIC_OPTIONS))
+    if dynamic_only:
+        raise ValueError(f"exudyn options {', '.join(_OPTION_PREFIX + o for o in dynamic_only)} are for dynamic "
+                         f"scenes ({', '.join(DYNAMIC_SCENES)}) only")
     t0 = time.perf_counter()
     scene = build(scene_name, **scene_params)
     fb_build = time.perf_counter() - t0
@@ -761,6 +1306,8 @@ def _fmt(value, spec: str = ".5g") -> str:
 
 def table_lines(result: dict) -> list[str]:
     """The printed comparison table (the same content as the JSON file)."""
+    if result.get("kind") == "dynamic":
+        return dynamic_table_lines(result)
     fb, ex = result["flexbody"], result["exudyn"]
     lines = [f"scene            {result['scene']}",
              f"parameters       {result['parameters']}" + (f"  exudyn {result['exudyn_options']}"
@@ -832,7 +1379,8 @@ def compare_cli(scene_name: str, params: dict, json_path: str | None, quiet: boo
         if not quiet:
             print(f"written          {json_path}")
     if not result["ok"]:
-        failed = [f"{k}: {result[k]['message']}" for k in ("flexbody", "exudyn") if not result[k]["converged"]]
+        failed = [f"{k}: {result[k]['message']}" for k in ("flexbody", "exudyn", "reference")
+                  if result.get(k) is not None and not result[k]["converged"]]
         print(f"flexbody compare: error: run did not converge ({'; '.join(failed)})", file=sys.stderr)
         return 2
     return 0
