@@ -8,7 +8,7 @@ converged state.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 import time
 from typing import Callable
 

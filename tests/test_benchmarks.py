@@ -4,7 +4,6 @@ Errors are measured at every tabulated load level; the relative error of a quant
 |value - reference| / max |reference| over the table (``flexbody.scenes.scene.compare_with_reference``).
 """
 
-import numpy as np
 import pytest
 
 from flexbody.scenes import build, run_scene

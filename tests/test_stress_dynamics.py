@@ -11,7 +11,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 _spec = importlib.util.spec_from_file_location("flexbody_stress_cases_dynamic",
                                                Path(__file__).parents[1] / "benchmarks" / "stress.py")

@@ -283,7 +283,7 @@ def d2_tangent(phi: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """
     phi, a, b = (np.asarray(x, dtype=float) for x in (phi, a, b))
     p = math.sqrt(phi @ phi)
-    A2, A3, C2, C3, E2, E3 = a2(p), a3(p), c2(p), c3(p), e2(p), e3(p)
+    A3, C2, C3, E2, E3 = a3(p), c2(p), c3(p), e2(p), e3(p)
     r = np.cross(phi, b)  # W b
     q = np.cross(phi, r)  # W^2 b
     m = np.cross(a, b)

@@ -1,11 +1,8 @@
 """HDF5 results file: layout, round trip, quaternions at every angle, a crashed run's file, bad paths."""
 
 import json
-import os
 from pathlib import Path
 import re
-import subprocess
-import sys
 import textwrap
 from types import SimpleNamespace
 
@@ -16,7 +13,7 @@ import pytest
 from flexbody.lie import so3
 from flexbody.outputs.hdf5 import (Hdf5Writer, matrices_from_quaternions, quaternions_from_matrices,
                                    read_hdf5, record_stats)
-from tests.outputs.common import REPO, run_python, square_mesh
+from tests.outputs.common import run_python, square_mesh
 
 
 def random_rotations(rng, n):

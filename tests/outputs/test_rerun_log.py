@@ -1,9 +1,5 @@
 """Rerun recording: read the .rrd back and check its content; rerun is never imported unless requested."""
 
-import os
-from pathlib import Path
-import subprocess
-import sys
 import textwrap
 from types import SimpleNamespace
 
@@ -12,7 +8,7 @@ import pytest
 
 from flexbody.lie import so3
 from flexbody.outputs.rerun_log import colormap, display_triangles
-from tests.outputs.common import REPO, run_python, square_mesh
+from tests.outputs.common import run_python, square_mesh
 
 
 def states(mesh, k):
