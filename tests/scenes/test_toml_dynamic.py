@@ -2,11 +2,10 @@
 
 import copy
 import json
-import math
 from pathlib import Path
 import textwrap
 
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, settings
 import numpy as np
 import pytest
 
@@ -14,6 +13,7 @@ from flexbody.cli import main
 from flexbody.scenes import build, load_toml_scene, run_scene
 from flexbody.scenes.sources import SceneError
 from flexbody.scenes.toml_scene import read_toml, scene_from_document
+from tests.scenes.mutations import mutate, mutations
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -138,42 +138,12 @@ EXAMPLE = REPO / "examples" / "spinning_membrane.toml"
 DOC = read_toml(EXAMPLE)
 
 
-def _paths(doc, prefix=()):
-    for key, value in doc.items():
-        here = prefix + (key,)
-        yield here
-        if isinstance(value, dict):
-            yield from _paths(value, here)
-        elif isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
-            for i, v in enumerate(value):
-                yield from _paths(v, here + (i,))
-
-
-PATHS = list(_paths(DOC))
-ODD = st.one_of(st.none(), st.booleans(), st.integers(-3, 3), st.sampled_from([0.0, -1.0, math.nan, math.inf, 1e300]),
-                st.text(max_size=4), st.lists(st.floats(allow_nan=True, allow_infinity=True), max_size=4),
-                st.dictionaries(st.text(max_size=3), st.integers(), max_size=2))
-
-
 @settings(max_examples=50, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(st.lists(st.tuples(st.sampled_from(PATHS), st.sampled_from(["delete", "replace", "extra"]), ODD),
-                min_size=1, max_size=3))
-def test_a_mutated_dynamic_scene_builds_or_says_why(mutations):
+@given(mutations(DOC))
+def test_a_mutated_dynamic_scene_builds_or_says_why(changes):
     doc = copy.deepcopy(DOC)
     doc["mesh"]["n_circ"] = 5                     # keep every valid build cheap
-    for path, action, value in mutations:
-        try:
-            parent = doc
-            for p in path[:-1]:
-                parent = parent[p]
-            if action == "delete":
-                del parent[path[-1]]
-            elif action == "replace":
-                parent[path[-1]] = value
-            elif isinstance(parent, dict):
-                parent["unknown_key_x"] = value
-        except (KeyError, IndexError, TypeError):
-            continue
+    doc = mutate(doc, changes)
     try:
         scene = scene_from_document(doc, EXAMPLE)
     except SceneError as exc:
