@@ -149,6 +149,15 @@ def _pyplot():
     return plt
 
 
+def _save(plt, fig, path: str, write: bool = True) -> bool:
+    """Lay out, write (if ``write``) and close a figure; returns ``write``."""
+    fig.tight_layout()
+    if write:
+        fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return write
+
+
 def _safe(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", name)
 
@@ -177,10 +186,7 @@ def plot_error_vs_time(runs: list[BenchRun], path: str) -> bool:
     ax.set_title("error against run time (labels: DoFs, or time step; red x: not converged)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return True
+    return _save(plt, fig, path)
 
 
 def plot_load_displacement(runs: list[BenchRun], path: str) -> bool:
@@ -207,10 +213,7 @@ def plot_load_displacement(runs: list[BenchRun], path: str) -> bool:
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
     fig.suptitle(runs[0].scene)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return True
+    return _save(plt, fig, path)
 
 
 def plot_drift_vs_time(runs: list[BenchRun], path: str) -> bool:
@@ -240,11 +243,7 @@ def plot_drift_vs_time(runs: list[BenchRun], path: str) -> bool:
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize=8)
     fig.suptitle("drift against run time (labels: time step)")
-    fig.tight_layout()
-    if plotted:
-        fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return plotted
+    return _save(plt, fig, path, plotted)
 
 
 def plot_time_histories(runs: list[BenchRun], path: str) -> bool:
@@ -273,10 +272,7 @@ def plot_time_histories(runs: list[BenchRun], path: str) -> bool:
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
     fig.suptitle(runs[0].scene)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return True
+    return _save(plt, fig, path)
 
 
 def _jsonable(obj):
