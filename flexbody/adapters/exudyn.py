@@ -43,6 +43,7 @@ the 20 x 20 model converged at 1e-6 as well) and runs at 1e-5.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import contextlib
 import json
 import math
 import sys
@@ -79,6 +80,32 @@ _RTOL_SCENE = {"slit_annular_plate": 1e-6, "pullout_cylinder": 1e-6, "hemisphere
 _OPTION_PREFIX = "exudyn_"
 _DYNAMIC_OPTIONS = ("energy_every", "reference", "reference_dt", "reference_end_time")
 _OPTIONS = ("model", "nx", "ny", "steps", "rtol") + _DYNAMIC_OPTIONS
+
+
+@contextlib.contextmanager
+def _quiet_console():
+    """exudyn's console output off for the duration (restored afterwards, whatever happens)."""
+    previous = exu.config.printToConsole
+    exu.config.printToConsole = False
+    try:
+        yield
+    finally:
+        exu.config.printToConsole = previous
+
+
+def _run_solver(solve) -> tuple[bool, str, float, float]:
+    """Run ``solve()`` quietly; an ``exu.SolverError`` becomes ``converged = False`` with its first line.
+
+    Returns (converged, message, wall time, CPU time).
+    """
+    converged, message = True, "completed"
+    t0, c0 = time.perf_counter(), time.process_time()
+    with _quiet_console():
+        try:
+            solve()
+        except exu.SolverError as exc:
+            converged, message = False, f"exudyn SolverError: {str(exc).splitlines()[0]}"
+    return converged, message, time.perf_counter() - t0, time.process_time() - c0
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -653,17 +680,8 @@ def solve(model: ExudynModel, reference=None) -> ExudynRun:
     converged step. ``reference`` (a flexbody ``Reference``) adds the errors against it.
     """
     settings = _settings(model)
-    converged, message = True, "completed"
-    print_to_console = exu.config.printToConsole
-    exu.config.printToConsole = False
-    t0, c0 = time.perf_counter(), time.process_time()
-    try:
-        model.mbs.SolveStatic(settings, storeSolver=True, showHints=False)
-    except exu.SolverError as exc:
-        converged, message = False, f"exudyn SolverError: {str(exc).splitlines()[0]}"
-    finally:
-        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-        exu.config.printToConsole = print_to_console
+    converged, message, wall, cpu = _run_solver(
+        lambda: model.mbs.SolveStatic(settings, storeSolver=True, showHints=False))
     solver = model.mbs.sys.get("staticSolver")
     iterations = int(solver.it.newtonStepsCount) if solver is not None else 0
     history = _history(model)
@@ -858,16 +876,12 @@ def build_dynamic_model(scene: Scene, options: dict | None = None, time_step: fl
         model.outputs.append(RadialOutput(out.name, indices, positions, np.asarray(out.center, float),
                                           np.asarray(out.axis, float), float(out.scale)))
     solver = exu.MainSolverStatic()
-    print_to_console = exu.config.printToConsole
-    exu.config.printToConsole = False
-    try:
+    with _quiet_console():
         s = _dynamic_settings(model, "generalized_alpha")
         solver.InitializeSolver(mbs, s)
         solver.ComputeMassMatrix(mbs)
         model.mass = np.array(solver.GetSystemMassMatrix(), float)
         solver.FinalizeSolver(mbs, s)
-    finally:
-        exu.config.printToConsole = print_to_console
     model.scalar_mass = model.mass[0::3, 0::3].copy()
     if np.abs(model.mass - np.kron(model.scalar_mass, np.eye(3))).max() > 1e-12 * np.abs(model.mass).max():
         raise ValueError("the ANCF mass matrix is not (scalar mass) x I_3; the angular momentum formula needs it")
@@ -918,9 +932,7 @@ def strain_energies(model: ExudynDynamicModel, displacements: list[np.ndarray], 
     s_pts, s_w = (s_pts + 1) / 2, s_w / 2
     solver = exu.MainSolverStatic()
     settings = _dynamic_settings(model, "generalized_alpha")
-    print_to_console = exu.config.printToConsole
-    exu.config.printToConsole = False
-    try:
+    with _quiet_console():
         solver.InitializeSolver(mbs, settings)
         out = []
         for u in displacements:
@@ -931,8 +943,6 @@ def strain_energies(model: ExudynDynamicModel, displacements: list[np.ndarray], 
                 energy -= wt * float(np.asarray(solver.GetSystemResidual()) @ u)
             out.append(energy)
         solver.FinalizeSolver(mbs, settings)
-    finally:
-        exu.config.printToConsole = print_to_console
     return np.array(out)
 
 
@@ -954,17 +964,8 @@ def solve_dynamic(model: ExudynDynamicModel, integrator: str = "generalized_alph
     settings = _dynamic_settings(model, integrator)
     solver_type = exu.DynamicSolverType.GeneralizedAlpha if integrator == "generalized_alpha" else \
         exu.DynamicSolverType.RK44
-    converged, message = True, "completed"
-    print_to_console = exu.config.printToConsole
-    exu.config.printToConsole = False
-    t0, c0 = time.perf_counter(), time.process_time()
-    try:
-        mbs.SolveDynamic(settings, solverType=solver_type, storeSolver=True, showHints=False)
-    except exu.SolverError as exc:
-        converged, message = False, f"exudyn SolverError: {str(exc).splitlines()[0]}"
-    finally:
-        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-        exu.config.printToConsole = print_to_console
+    converged, message, wall, cpu = _run_solver(
+        lambda: mbs.SolveDynamic(settings, solverType=solver_type, storeSolver=True, showHints=False))
     sd = mbs.systemData
     t_reached = float(sd.GetTime())
     if converged:
@@ -1566,17 +1567,7 @@ def solve_scene_in_exudyn(scene: Scene, constraints=None, rtol: float = 1e-10) -
     s.staticSolver.newton.relativeTolerance = rtol
     s.solution.file.write = False
     s.linearSolver.solverType = exu.LinearSolverType.EigenSparse
-    converged, message = True, "completed"
-    print_to_console = exu.config.printToConsole
-    exu.config.printToConsole = False
-    t0 = time.perf_counter()
-    try:
-        mbs.SolveStatic(s, storeSolver=True, showHints=False)
-    except exu.SolverError as exc:
-        converged, message = False, f"exudyn SolverError: {str(exc).splitlines()[0]}"
-    finally:
-        wall = time.perf_counter() - t0
-        exu.config.printToConsole = print_to_console
+    converged, message, wall, _ = _run_solver(lambda: mbs.SolveStatic(s, storeSolver=True, showHints=False))
     q = np.asarray(mbs.systemData.GetODE2Coordinates())[mbs.systemData.GetObjectLTGODE2(shell.object)]
     state = shell.state(q)
     solver = mbs.sys.get("staticSolver")
@@ -1725,17 +1716,8 @@ def hub_driven_membrane_in_exudyn(params: dict | None = None, flexbody_alone: bo
     s.timeIntegration.adaptiveStep = adaptive_step
     s.solution.file.write = False
     s.linearSolver.solverType = exu.LinearSolverType.EigenSparse
-    converged, message = True, "completed"
-    print_to_console = exu.config.printToConsole
-    exu.config.printToConsole = False
-    t0 = time.perf_counter()
-    try:
-        mbs.SolveDynamic(s, solverType=exu.DynamicSolverType.GeneralizedAlpha)
-    except exu.SolverError as exc:
-        converged, message = False, f"exudyn SolverError: {str(exc).splitlines()[0]}"
-    finally:
-        wall = time.perf_counter() - t0
-        exu.config.printToConsole = print_to_console
+    converged, message, wall, _ = _run_solver(
+        lambda: mbs.SolveDynamic(s, solverType=exu.DynamicSolverType.GeneralizedAlpha))
     t_end = float(mbs.systemData.GetTime())
     converged = converged and abs(t_end - a.end_time) <= 1e-9 * a.end_time
     if not history["time"] or abs(history["time"][-1] - t_end) > 1e-12:
