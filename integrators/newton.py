@@ -1,10 +1,14 @@
-"""The Newton loop shared by statics and dynamics, with the tangent-reuse policy and its counters.
+"""The Newton loop of the static solvers, with the tangent-reuse policy and its counters.
 
 The tangent of the SE(3) local-frame formulation does not change under rigid motion, so a factorized
 tangent often stays good over several iterations and steps. Policy:
-- "full": a new tangent and factorization every iteration (classical Newton);
+- "full": a new tangent and factorization every iteration (classical Newton), except near convergence:
+  once the iterate lies within ``lazy_tangent`` of the state at which the factorization held was computed,
+  the residual is evaluated alone first, convergence tested on it, and the factorization kept (chord
+  steps) while the residual contracts by ``refresh_ratio`` (a chord step that does not is undone);
 - "modified": keep the factorization while the residual contracts fast enough (ratio < ``refresh_ratio``);
   refresh it otherwise, and always when an iteration diverges.
+Both stop on the same tests (force residual, or an increment below ``increment_tol``).
 """
 
 from __future__ import annotations
@@ -29,12 +33,19 @@ class NewtonSettings:
     line_search: bool = False     # Crisfield's line search on s(a) = dq . r(q o exp(a dq))
     line_search_ratio: float = 0.5
     line_search_max: int = 6
+    # "full" policy: while the iterate lies within lazy_tangent (the scaled corrections, summed, as for
+    # increment_tol) of the state of the factorization held, the residual is evaluated alone first and tested
+    # (force test; increment test with that factorization), and chord steps are taken on that factorization
+    # while the residual contracts by refresh_ratio. 0: classical Newton (a tangent every iteration).
+    lazy_tangent: float = 1e-4
 
     def __post_init__(self) -> None:
         if self.policy not in ("full", "modified"):
             raise ValueError(f"Newton policy must be 'full' or 'modified', got {self.policy!r}")
         if not (self.rtol > 0 and self.max_iterations >= 1):
             raise ValueError("Newton rtol must be > 0 and max_iterations >= 1")
+        if not (self.lazy_tangent >= 0):
+            raise ValueError(f"Newton lazy_tangent must be >= 0, got {self.lazy_tangent!r}")
 
 
 @dataclass
@@ -54,31 +65,60 @@ class NewtonOutcome:
     residuals: list[float] = field(default_factory=list)
     reason: str = ""
     non_finite: bool = False      # stopped on a non-finite residual or state (at ``iterations``)
+    # how far the returned state lies from the state at which the solver's factorization was computed (the
+    # max-norms of the scaled corrections since, summed): 0 if computed there, inf if unknown
+    factorization_lag: float = float("inf")
+    increment: object = None      # the sum of the corrections applied (None if none was)
+    factorizations: int = 0       # made in this solve
+
+
+def _first_non_finite(r: np.ndarray) -> str:
+    bad = np.flatnonzero(~np.isfinite(r))
+    return f"first at equation {int(bad[0])}" if bad.size else "its norm overflows"
 
 
 def newton_solve(state, residual: Callable, residual_and_tangent: Callable, update: Callable,
                  reference_norm: float, settings: NewtonSettings, solver: LinearSolver,
                  stats: NewtonStats, fresh_tangent: bool = True, dof_scale=1.0,
-                 conjugate: Callable | None = None):
+                 conjugate: Callable | None = None, held_lag: float = float("inf")):
     """Solve r(q) = 0 from ``state``; returns (state, outcome). Never returns a non-finite state.
 
     Converged when ||r|| <= max(rtol * reference_norm, atol), or when an increment scaled by ``dof_scale``
     (a length for translations, 1 for rotations) is below ``increment_tol``: the residual has then reached
     its round-off floor, which for thin shells (membrane stiffness >> bending load) can lie above rtol.
-    ``solver`` may hold a factorization from earlier iterations or steps; with ``fresh_tangent`` (or the
-    "full" policy) it is refreshed at the first iteration.
+    ``solver`` may hold a factorization from earlier iterations or steps: it serves the first iteration
+    unless ``fresh_tangent`` (the static solvers pass False under the "full" policy only when it was
+    computed within ``lazy_tangent`` of the start: the last iterates of the previous step); ``held_lag`` is
+    that distance (the scaled corrections since, summed; reported back in ``factorization_lag``).
+
+    Near convergence -- the iterate within ``lazy_tangent`` of the state at which the factorization held was
+    computed -- the "full" policy evaluates the residual alone first (as the "modified" policy always does).
+    Converged if it passes the force test, or if the correction it gives with the factorization held passes
+    the increment test (that correction, below ``increment_tol``, is round-off and is not applied). If it
+    has not converged but contracted by ``refresh_ratio``, the next step is a chord step on the same
+    factorization; otherwise a tangent is assembled and factorized (a chord step that did not contract is
+    undone first: the fresh tangent is taken where classical Newton takes it). The tests are those of
+    classical Newton: the increments of the held and of a fresh tangent differ by a relative
+    O(lazy_tangent), and a borderline case falls through to the fresh tangent. This saves the tangent and
+    factorization that classical Newton spends on the last iterate (the one at the round-off floor, or
+    within the force tolerance), and those of the last quadratic steps, which a chord step does as well.
 
     Line search (Crisfield): s(a) = w . r(q o exp(a dq)) with w = conjugate(q, dq) the increment paired with
     the residual by virtual work (s is the derivative of the energy along the step for conservative
     loads). The full step is kept when |s(1)| <= ratio |s(0)|; otherwise a is found by secant steps on s.
-    Thin shells need this: after a bending step the membrane residual is huge but nearly orthogonal to
-    the step, which a residual-norm line search would wrongly reject.
+    It works on s rather than on ||r|| because after a bending step the membrane residual of a thin shell
+    is huge but nearly orthogonal to the step, which a residual-norm line search would wrongly reject.
+    (Measured on the load-control benchmarks it still costs 1.7-26x the iterations of plain Newton,
+    docs/performance.md: it is off by default.)
     """
     scale = max(reference_norm, settings.atol)
     tol = max(settings.rtol * scale, settings.atol)
     outcome = NewtonOutcome(False, 0)
-    need_tangent = fresh_tangent or settings.policy == "full" or not solver.ready
+    need_tangent = fresh_tangent or not solver.ready
+    lag = held_lag
     r = None
+    chord_base = None        # full policy: (state, lag, increment) a chord step started from, to undo it
+    reevaluated = False      # the iterate is one whose residual is already in the history
     for it in range(settings.max_iterations + 1):
         try:
             if need_tangent:
@@ -94,14 +134,16 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
             return state, outcome
         norm = float(np.linalg.norm(r))
         if not np.isfinite(norm):
-            first = int(np.flatnonzero(~np.isfinite(r))[0])
-            outcome.reason = f"non-finite residual at iteration {it} (first at equation {first})"
+            outcome.reason = f"non-finite residual at iteration {it} ({_first_non_finite(r)})"
             outcome.non_finite, outcome.iterations = True, it
             return state, outcome
-        outcome.residuals.append(norm)
+        if not reevaluated:
+            outcome.residuals.append(norm)
+        reevaluated = False
         if norm <= tol:
             outcome.converged = True
             outcome.iterations = it
+            outcome.factorization_lag = lag
             return state, outcome
         if it == settings.max_iterations:
             outcome.reason = f"no convergence in {settings.max_iterations} iterations (|r| = {norm:.3e}, tol {tol:.1e})"
@@ -124,42 +166,72 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
                 outcome.reason = str(exc)
                 return state, outcome
             stats.factorizations += 1
+            outcome.factorizations += 1
+            lag = 0.0
         try:
             dq = solver.solve(-r)
         except SingularMatrixError as exc:
             outcome.reason = str(exc)
             return state, outcome
         if settings.line_search:
-            state, r_new = _line_search(state, dq, r, residual, update, conjugate, settings, stats)
+            state, r_new, a = _line_search(state, dq, r, residual, update, conjugate, settings, stats)
         else:
-            state, r_new = update(state, dq), None
+            state, r_new, a = update(state, dq), None, 1.0
         stats.iterations += 1
         outcome.iterations = it + 1
-        if np.max(np.abs(dq / dof_scale)) <= settings.increment_tol and len(outcome.residuals) > 1:
+        outcome.increment = a * dq if outcome.increment is None else outcome.increment + a * dq
+        size = float(np.max(np.abs(dq / dof_scale)))
+        lag += abs(a) * size
+        if size <= settings.increment_tol and len(outcome.residuals) > 1:
             outcome.converged = True
             outcome.residuals.append(float("nan"))  # not evaluated: converged on the increment
+            outcome.factorization_lag = lag
             return state, outcome
         # decide on the tangent for the next iteration
-        if settings.policy == "full":
+        base, chord_base = chord_base, None
+        lazy = settings.policy == "modified" or lag <= settings.lazy_tangent or base is not None
+        if not lazy:
             need_tangent = True
-        else:
-            if r_new is None:
-                try:
-                    r_new = residual(state)
-                except FloatingPointError:
-                    r_new = None
-                stats.residual_evaluations += 1
-            if r_new is None or not np.all(np.isfinite(r_new)):
-                need_tangent, r = True, None   # the next iteration evaluates (and reports) it in full
-                continue
-            norm_new = float(np.linalg.norm(r_new))
-            need_tangent = not (norm_new < settings.refresh_ratio * norm)
-            r = None if need_tangent else r_new
+            continue
+        if r_new is None:
+            try:
+                r_new = residual(state)
+            except FloatingPointError:
+                r_new = None
+            stats.residual_evaluations += 1
+        finite = r_new is not None and bool(np.all(np.isfinite(r_new)))
+        norm_new = float(np.linalg.norm(r_new)) if finite else float("inf")
+        # modified Newton, and full Newton on a factorization computed within lazy_tangent: keep it while
+        # the residual contracts (a converged residual is reported by the next iteration)
+        need_tangent = not (norm_new <= tol or norm_new < settings.refresh_ratio * norm)
+        if need_tangent and finite:
+            # the round-off floor, tested with the factorization held before a new one is made
+            try:
+                dq_held = solver.solve(-r_new)
+            except SingularMatrixError:
+                dq_held = None
+            if dq_held is not None and float(np.max(np.abs(dq_held / dof_scale))) <= settings.increment_tol:
+                outcome.converged = True
+                outcome.residuals += [norm_new, float("nan")]   # |r| at the floor; its correction is round-off
+                outcome.factorization_lag = lag
+                return state, outcome
+        if need_tangent and base is not None:
+            # a chord step that did not contract is undone: a fresh tangent at the iterate it started from,
+            # as classical Newton would have taken there
+            state, lag, outcome.increment = base
+            r, reevaluated = None, True
+            continue
+        if not finite:
+            need_tangent, r = True, None   # the next iteration evaluates (and reports) it in full
+            continue
+        if not need_tangent and settings.policy == "full" and norm_new > tol:
+            chord_base = (state, lag, outcome.increment)
+        r = None if need_tangent else r_new
     return state, outcome
 
 
 def _line_search(state, dq, r0, residual, update, conjugate, settings: NewtonSettings, stats: NewtonStats):
-    """Secant line search on s(a) = w . r(q o exp(a dq)); returns the new state and its residual."""
+    """Secant line search on s(a) = w . r(q o exp(a dq)); returns the new state, its residual and a."""
     w = dq if conjugate is None else conjugate(state, dq)
     s0 = float(w @ r0)
     trial = update(state, dq)
@@ -173,7 +245,7 @@ def _line_search(state, dq, r0, residual, update, conjugate, settings: NewtonSet
     else:
         s1 = float(w @ r1)
     if s0 >= 0 or abs(s1) <= settings.line_search_ratio * abs(s0):
-        return trial, r1
+        return trial, r1, 1.0
     a_lo, s_lo, a_hi, s_hi = 0.0, s0, 1.0, s1
     best = (abs(s1), 1.0, trial, r1)
     for _ in range(settings.line_search_max):
@@ -192,9 +264,9 @@ def _line_search(state, dq, r0, residual, update, conjugate, settings: NewtonSet
         if abs(sa) < best[0]:
             best = (abs(sa), a, trial, ra)
         if abs(sa) <= settings.line_search_ratio * abs(s0):
-            return trial, ra
+            return trial, ra, a
         if sa < 0:
             a_lo, s_lo = a, sa
         else:
             a_hi, s_hi = a, sa
-    return best[2], best[3]
+    return best[2], best[3], best[1]

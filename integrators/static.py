@@ -39,7 +39,8 @@ class FailureReport:
     trial_load_factor: float           # the load factor of the last attempt
     residuals: list[float]             # residual norms of the last attempt
     reason: str
-    attempts: int                      # attempts at this step (1 + its cut-backs)
+    attempts: int                      # attempts at this step (1 + its cut-backs, + 1 for a failed
+                                       # secant-predicted start)
     non_finite: bool = False
 
 
@@ -54,6 +55,9 @@ class StaticResult:
     wall_time: float = 0.0
     cutbacks: int = 0
     failure: FailureReport | None = None
+
+
+MAX_EXTRAPOLATION = 2.0   # the secant predictor extrapolates at most twice the previous step
 
 
 def _reference_norm(model, state, lam: float) -> float:
@@ -80,15 +84,31 @@ def _failure_message(f: FailureReport) -> str:
 
 def load_control(model, load_factors=None, *, n_steps: int = 10, settings: NewtonSettings | None = None,
                  min_step: float = 1e-4, max_step: float | None = None, adaptive: bool = True,
-                 on_step: Callable | None = None, state=None) -> StaticResult:
+                 on_step: Callable | None = None, state=None, predictor: str = "tangent",
+                 grow_iterations: int | None = None) -> StaticResult:
     """Follow the path by prescribing the load factor.
 
     Parameters
     ----------
     load_factors : increasing load levels to reach exactly (default: n_steps equal steps to 1)
-    adaptive : between the prescribed levels, grow the step after easy convergence (<= 4 iterations)
-        and halve it after a failure, down to ``min_step`` (fraction of the total load)
+    adaptive : between the prescribed levels, grow the step (by 1.5) after easy convergence and halve it
+        after a failure, down to ``min_step`` (fraction of the total load). Easy: at most
+        ``grow_iterations`` Newton iterations on a fresh tangent (under the "modified" policy: iterations);
+        None: half of ``settings.max_iterations``, at least 4. A thin shell takes 5-12 iterations per step
+        almost whatever its size, so that growing only after <= 4 iterations (the rule until 2026-12) kept
+        the slit plate at its first step, 0.025, where its levels are 0.05 apart.
     on_step : called as on_step(record, state) after each converged step (outputs hang off here)
+    predictor : "tangent" (default): each step starts from the last converged state, so that the first
+        Newton correction is the tangent predictor; "secant": it starts from that state moved on by the
+        previous step's increment (the sum of its Newton corrections, scaled by the ratio of the load
+        steps, at most ``MAX_EXTRAPOLATION``); if Newton fails from there, the step is retried from the
+        converged state before any cut-back. On the thin-shell benchmarks the secant start costs more
+        iterations, not fewer (docs/performance.md), which is why it is not the default.
+
+    Under the "full" policy a step starts on the factorization left by the previous step when that was
+    computed within ``settings.lazy_tangent`` of the converged state (the last iterates of a converged
+    step): the first correction is then the tangent predictor to a relative O(lazy_tangent), for a
+    tangent that does not depend on the load factor (dead forces), and a modified-Newton step otherwise.
     """
     settings = settings or NewtonSettings()
     targets = np.linspace(0, 1, n_steps + 1)[1:] if load_factors is None else np.asarray(load_factors, float)
@@ -97,6 +117,10 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
         raise ValueError(f"load factors must be finite, non-negative and increasing, got {targets!r}")
     if not (np.isfinite(min_step) and min_step > 0):
         raise ValueError(f"min_step must be positive, got {min_step!r}")
+    if predictor not in ("tangent", "secant"):
+        raise ValueError(f"predictor must be 'tangent' or 'secant', got {predictor!r}")
+    if grow_iterations is None:
+        grow_iterations = max(4, settings.max_iterations // 2)
     _check_support(model)
     state = model.initial_state() if state is None else state
     solver, stats = LinearSolver(), NewtonStats()
@@ -106,6 +130,8 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
     step = first_step
     max_step = max_step or (targets[-1] - 0.0)
     attempts = 0
+    held_lag = float("inf")            # distance of the state from the factorization held (scaled increments)
+    prev_increment, prev_dlam, use_predictor = None, 0.0, predictor == "secant"
     for target in targets:
         while lam < target - 1e-14:
             # land exactly on the prescribed level (no sliver step, no level missed by round-off)
@@ -116,17 +142,31 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
                 reference = _reference_norm(model, state, trial)
             except FloatingPointError as exc:
                 reference, early = np.nan, str(exc)
+            start, shift = state, None
+            if np.isfinite(reference) and use_predictor and prev_increment is not None:
+                shift = min((trial - lam) / prev_dlam, MAX_EXTRAPOLATION) * prev_increment
+                try:
+                    start = model.update(state, shift)
+                except FloatingPointError:
+                    start, shift = state, None
             if not np.isfinite(reference):
                 out = None
             else:
+                # modified Newton keeps the factorization of an earlier step until convergence slows, full
+                # Newton the one from the last iterates of the previous step; a retry after a failure
+                # starts from a fresh tangent
+                reuse = attempts == 1 and shift is None and (settings.policy == "modified"
+                                                             or held_lag <= settings.lazy_tangent)
                 new_state, out = newton_solve(
-                    state, lambda q: model.residual(q, trial), lambda q: model.residual_and_tangent(q, trial),
-                    model.update, reference, settings, solver, stats,
-                    # modified Newton keeps the factorization of an earlier step until convergence slows;
-                    # a retry after a failure starts from a fresh tangent
-                    fresh_tangent=settings.policy == "full" or attempts > 1,
-                    dof_scale=model.dof_scale, conjugate=model.conjugate)
+                    start, lambda q: model.residual(q, trial), lambda q: model.residual_and_tangent(q, trial),
+                    model.update, reference, settings, solver, stats, fresh_tangent=not reuse,
+                    dof_scale=model.dof_scale, conjugate=model.conjugate, held_lag=held_lag)
+            held_lag = float("inf")
             if out is None or not out.converged:
+                if shift is not None:
+                    # the predicted start failed: retry the same load from the last converged state
+                    use_predictor = False
+                    continue
                 if out is None:
                     reason = early or "non-finite external load (the reference force is not finite)"
                     residuals, non_finite, at_start = [], True, True
@@ -144,13 +184,21 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
                     return StaticResult(state, lam, records, stats, False, _failure_message(failure),
                                         time.perf_counter() - t0, cutbacks, failure)
                 continue
-            attempts = 0
+            attempts, held_lag = 0, out.factorization_lag
+            if predictor == "secant":
+                increment = out.increment
+                if shift is not None:
+                    increment = shift if increment is None else shift + increment
+                prev_increment, prev_dlam, use_predictor = increment, trial - lam, True
             state, lam = new_state, trial
             rec = StepRecord(len(records) + 1, lam, out.iterations, out.residuals, time.perf_counter() - t0)
             records.append(rec)
             if on_step is not None:
                 on_step(rec, state)
-            if adaptive and out.iterations <= 4:
+            # the effort of the step: its Newton iterations (under the "full" policy those on a fresh
+            # tangent: the chord steps near convergence cost a residual and a solve each)
+            effort = out.iterations if settings.policy == "modified" else out.factorizations
+            if adaptive and effort <= grow_iterations:
                 step = min(step * 1.5, max_step)
     return StaticResult(state, lam, records, stats, True, "completed", time.perf_counter() - t0, cutbacks)
 
@@ -168,6 +216,14 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
     to ``desired_iterations``; ``max_load_increment`` caps the load-factor change of a step (a dense record
     of the path). The run ends when lam reaches ``lam_max``: the last step is then solved under load
     control at exactly lam_max.
+
+    The predictor solves on the factorization left by the last iterates of the previous step when that was
+    computed within ``settings.lazy_tangent`` of the converged state (else on a fresh tangent there), and an
+    iterate within ``lazy_tangent`` of the last factorization is tested on its residual alone before a
+    tangent is assembled. The converged point of a step is the intersection of the path with the arc, so a
+    slightly different predictor moves it along the path only through the step-length control
+    (``max_load_increment``): on the pulled cylinder the outputs at the reference levels changed by 7e-6 of
+    their range against a fresh tangent for every predictor.
     """
     settings = settings or NewtonSettings()
     if not (np.isfinite(lam_max) and lam_max > 0 and np.isfinite(initial_increment) and initial_increment > 0):
@@ -188,8 +244,10 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
     try:
         r, K = model.residual_and_tangent(state, 0.0)
         stats.tangent_updates += 1
+        stats.residual_evaluations += 1
         solver.factorize(K)
         stats.factorizations += 1
+        held_lag = 0.0                 # distance of the state from the factorization held (scaled increments)
         f0 = model.external_force(state)
         dq_f = solver.solve(f0)
     except FloatingPointError as exc:
@@ -203,12 +261,15 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
 
     for _ in range(max_steps):
         attempts += 1
-        # predictor along the tangent, in the direction of the previous step
+        # predictor along the tangent, in the direction of the previous step; the factorization left by the
+        # last iterates of the previous step serves if it was computed within lazy_tangent of its end
         try:
-            r, K = model.residual_and_tangent(state, lam)
-            stats.tangent_updates += 1
-            solver.factorize(K)
-            stats.factorizations += 1
+            if not held_lag <= settings.lazy_tangent:
+                r, K = model.residual_and_tangent(state, lam)
+                stats.tangent_updates += 1
+                stats.residual_evaluations += 1
+                solver.factorize(K)
+                stats.factorizations += 1
             dq_f = solver.solve(model.external_force(state))
         except FloatingPointError as exc:
             return stop(lam, [], f"non-finite values at the last converged state: {exc}; stopped at once", True)
@@ -222,30 +283,43 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
         Dq = dlam * dq_f
         trial = model.update(state, Dq)
         trial_lam = lam + dlam
-        ok, residuals, it, reason, non_finite = False, [], 0, "", False
+        held_lag = float("inf")
+        ok, residuals, it, reason, non_finite, lazy = False, [], 0, "", False, False
         ref = _reference_norm(model, state, max(abs(trial_lam), 1e-12))
+        tol = max(settings.rtol * ref, settings.atol)
         for it in range(1, settings.max_iterations + 1):
             try:
-                r, K = model.residual_and_tangent(trial, trial_lam)
+                # near convergence (the last correction below lazy_tangent) the residual alone first
+                if lazy:
+                    r, K = model.residual(trial, trial_lam), None
+                else:
+                    r, K = model.residual_and_tangent(trial, trial_lam)
+                    stats.tangent_updates += 1
+                stats.residual_evaluations += 1
             except FloatingPointError as exc:
                 reason, non_finite = f"non-finite values at iteration {it}: {exc}", True
                 break
-            stats.tangent_updates += 1
             norm = float(np.linalg.norm(r))
             residuals.append(norm)
             if not np.isfinite(norm):
                 reason, non_finite = f"non-finite residual at iteration {it}", True
                 break
-            if norm <= max(settings.rtol * ref, settings.atol) and it > 1:
+            if norm <= tol and it > 1:
                 ok = True
                 break
             try:
+                if K is None:
+                    r, K = model.residual_and_tangent(trial, trial_lam)
+                    stats.tangent_updates += 1
+                    stats.residual_evaluations += 1
                 solver.factorize(K)
                 stats.factorizations += 1
+                held_lag = 0.0
                 a = solver.solve(-r)
                 b = solver.solve(model.external_force(trial))
             except (SingularMatrixError, FloatingPointError) as exc:
                 reason = str(exc)
+                held_lag = float("inf")
                 break
             # ||Dq + a + x b||^2 = dl^2
             u = Dq + a
@@ -261,9 +335,13 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
             Dq = Dq + dq
             trial_lam += x
             stats.iterations += 1
+            size = float(np.max(np.abs(dq / model.dof_scale)))
+            held_lag += size
+            lazy = size <= settings.lazy_tangent
         else:
             reason = f"no convergence in {settings.max_iterations} iterations"
         if not ok:
+            held_lag = float("inf")
             cutbacks += 1
             dl /= 2
             if dl < min_increment_ratio * dl0:
@@ -275,7 +353,8 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
             state_end, out = newton_solve(
                 trial, lambda q: model.residual(q, lam_max), lambda q: model.residual_and_tangent(q, lam_max),
                 model.update, _reference_norm(model, trial, lam_max), settings, solver, stats,
-                dof_scale=model.dof_scale, conjugate=model.conjugate)
+                fresh_tangent=not held_lag <= settings.lazy_tangent, dof_scale=model.dof_scale,
+                conjugate=model.conjugate, held_lag=held_lag)
             if out.converged:
                 rec = StepRecord(len(records) + 1, lam_max, out.iterations, out.residuals, time.perf_counter() - t0)
                 records.append(rec)
@@ -285,6 +364,7 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                                     time.perf_counter() - t0, cutbacks)
             dl /= 2
             cutbacks += 1
+            held_lag = float("inf")
             if dl < min_increment_ratio * dl0:
                 return stop(lam_max, out.residuals, f"final step to lam_max: {out.reason}", out.non_finite)
             continue

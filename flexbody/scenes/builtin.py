@@ -20,7 +20,7 @@ from flexbody.loads import NodalLoad, nodal_vectors_from_edges
 from flexbody.mesh import generators
 from flexbody.scenes.reference import read_reference_csv
 from flexbody.scenes.scene import (AngularVelocity, DynamicAnalysis, Output, RadialDisplacement, Reference, Scene,
-                                   StaticAnalysis)
+                                   StaticAnalysis, kernel_threads)
 from flexbody.shell.material import ShellMaterial
 from integrators.newton import NewtonSettings
 
@@ -366,7 +366,6 @@ def settle_spin(dyn, omega, settle_time: float, h: float = 5e-3):
     Released unstressed with the rigid field omega x (x - c), a spinning body vibrates about its
     centrifugal stretch; a rho_inf = 0 run of ``settle_time`` removes the vibration.
     """
-    from flexbody.scenes.dynamic_run import kernel_threads
     from integrators.generalized_alpha import AlphaSettings, generalized_alpha
     s = dyn.model.initial_state()
     c, _ = dyn.rigid_inertia_tensor(s)

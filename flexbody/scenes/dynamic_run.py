@@ -20,14 +20,13 @@ recorded steps): |value - reference| / max|reference of that quantity|.
 
 from __future__ import annotations
 
-from contextlib import contextmanager
 from dataclasses import dataclass
 import time
 from typing import Callable
 
 import numpy as np
 
-from flexbody.scenes.scene import DynamicAnalysis, Reference, Scene
+from flexbody.scenes.scene import DynamicAnalysis, Reference, Scene, kernel_threads
 
 ENERGY_KEYS = ("kinetic", "strain", "gravity", "total")
 
@@ -219,22 +218,6 @@ def _is_isolated(scene: Scene) -> bool:
     model, a = scene.model, scene.analysis
     constrained = bool(np.any(model.fixed[:, :5]) or np.any(model.has_basis))
     return _is_conservative(scene) and not (constrained or np.any(np.asarray(a.gravity, float) != 0))
-
-
-@contextmanager
-def kernel_threads(threads: int | None, n_elements: int):
-    """Run the block with ``threads`` numba threads (None: automatic, see ``DynamicAnalysis.threads``)."""
-    import numba
-    wanted = threads
-    if wanted is None and n_elements < DynamicAnalysis.SINGLE_THREAD_ELEMENTS:
-        wanted = 1
-    before = numba.get_num_threads()
-    if wanted is not None:
-        numba.set_num_threads(min(wanted, numba.config.NUMBA_NUM_THREADS))
-    try:
-        yield
-    finally:
-        numba.set_num_threads(before)
 
 
 def _output_value(out, model, dyn, state, velocity: np.ndarray) -> float:

@@ -9,6 +9,7 @@ run never assembles a mass matrix.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 import time
 from typing import Callable, ClassVar
@@ -235,6 +236,23 @@ class RunSummary:
         }
 
 
+@contextmanager
+def kernel_threads(threads: int | None, n_elements: int):
+    """Run the block with ``threads`` numba threads (None: automatic: one thread below
+    ``DynamicAnalysis.SINGLE_THREAD_ELEMENTS`` elements, see ``DynamicAnalysis.threads``; static runs too)."""
+    import numba
+    wanted = threads
+    if wanted is None and n_elements < DynamicAnalysis.SINGLE_THREAD_ELEMENTS:
+        wanted = 1
+    before = numba.get_num_threads()
+    if wanted is not None:
+        numba.set_num_threads(min(wanted, numba.config.NUMBA_NUM_THREADS))
+    try:
+        yield
+    finally:
+        numba.set_num_threads(before)
+
+
 def compare_with_reference(history: dict[str, list[float]], reference: Reference) -> list[dict]:
     """Relative errors at every tabulated load factor reached (linear interpolation between steps).
 
@@ -265,6 +283,9 @@ def compare_with_reference(history: dict[str, list[float]], reference: Reference
 def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable | None = None):
     """Run a scene; track the outputs at every converged (static) or recorded (dynamic) step; compare
     with the reference.
+
+    Static runs of meshes below ``DynamicAnalysis.SINGLE_THREAD_ELEMENTS`` elements run the element kernel on
+    one numba thread (thread start-up costs more than it gains there, see :func:`kernel_threads`).
 
     Parameters
     ----------
@@ -297,13 +318,14 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
     model.warm_up()  # numba compilation is not run time
     t0 = time.perf_counter()
     a = scene.analysis
-    if a.method == "load_control":
-        result = load_control(model, a.load_factors, settings=a.newton, on_step=record)
-    elif a.method == "arc_length":
-        result = arc_length(model, lam_max=max(a.load_factors), initial_increment=a.arc_increment,
-                            max_load_increment=a.max_load_increment, settings=a.newton, on_step=record)
-    else:
+    if a.method not in ("load_control", "arc_length"):
         raise ValueError(f"analysis method must be 'load_control' or 'arc_length', got {a.method!r}")
+    with kernel_threads(None, model.body.mesh.n_elements):
+        if a.method == "load_control":
+            result = load_control(model, a.load_factors, settings=a.newton, on_step=record)
+        else:
+            result = arc_length(model, lam_max=max(a.load_factors), initial_increment=a.arc_increment,
+                                max_load_increment=a.max_load_increment, settings=a.newton, on_step=record)
     wall = time.perf_counter() - t0
     errors = compare_with_reference(history, scene.reference) if scene.reference else []
     return RunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, history, errors, wall)

@@ -34,3 +34,37 @@ class CubicSpring:
 
     def conjugate(self, q, dq):
         return dq
+
+
+class HardeningSpring:
+    """One DoF, f_int(w) = w + w^3 (stiffening: a secant extrapolation overshoots). Any evaluation above
+    ``fail_above`` raises as a non-finite element would; ``failures`` counts them."""
+
+    def __init__(self, load=1.0, fail_above=None):
+        self.load, self.fail_above, self.failures = load, fail_above, 0
+        self.dof_scale = 1.0
+
+    def f_int(self, w):
+        return w + w**3
+
+    def initial_state(self):
+        return np.zeros(1)
+
+    def residual(self, q, lam):
+        if self.fail_above is not None and q[0] > self.fail_above:
+            self.failures += 1
+            raise FloatingPointError("non-finite state (forced by the test model)")
+        return np.array([self.f_int(q[0]) - lam * self.load])
+
+    def residual_and_tangent(self, q, lam):
+        return self.residual(q, lam), sp.csc_matrix([[1.0 + 3.0 * q[0] ** 2]])
+
+    def external_force(self, q):
+        return np.array([self.load])
+
+    def update(self, q, dq):
+        return q + dq
+
+    def conjugate(self, q, dq):
+        return dq
+
