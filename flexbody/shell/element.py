@@ -8,23 +8,26 @@ computes (the same strains and the same terms of the second variation), arranged
    z = [dx_I, dtheta_0, dd_1..dd_5], dx_I = R_I du_I (global translations) and the variations of the relative
    rotation vectors dd_I = T^-1(d_I) dtheta_I - T^-1(-d_I) dtheta_0 (paper Eq. 31): z = P h. In z every point
    quantity is a *scalar* (shape function) combination of a few 3x3 blocks. z is stored component-major,
-   translations first: dx_I[c] at 6c + I, rotations (dtheta_0, dd_I)[c] at 18 + 6c + I.
+   translations first: dx_I[c] at 8c + I, rotations (dtheta_0, dd_I)[c] at 24 + 8c + I (8 lanes).
 2. **Point slots.** At an evaluation point the strain measures depend on z only through 18 numbers
    xi = [dx_,r, dx_,s, dtheta_0, dd, dd_,r, dd_,s] = Pi z (Pi holds N_I, dN_I). The Jacobian G (12 x 18), the B
    rows and the contracted second variation (18 x 18) are formed in xi from closed-form 3x3 blocks and
    expanded once per point into z in two sparse stages. Only the rotation-rotation block of the second
-   variation is non-symmetric: the translation rows are accumulated as an upper triangle, the rotation block
-   in full.
+   variation is non-symmetric: the translation rows are accumulated as an upper block triangle, the rotation
+   block in full (see _KR).
 3. **Node terms.** K_h = P^T K_z P + (D P^T[.]) f_z: the derivative of P gives hat(f_u,I) in the (u_I, theta_I)
    block and the D T^-1 terms of Delta(delta d_I), contracted with f_z at dd_I (which equals the reference's
    sum over points of N_I g_d + dN_I . g_da).
 
 The assumed-strain map A (7, 8, 17, 8) is compressed in Python (:class:`CompressedMaps`): rows of a Gauss point
 that only use that Gauss point ("local": bending; all rows with tying off) enter the point's 18 x 18 slot matrix;
-the other rows ("nonlocal": membrane and shear with tying on) are factored exactly, A_nl = M E, through the
-independent sampled combinations E at the tying points (17 for MITC6: e_rr, e_ss, e_qq, e_rt, e_st, e_qt), so
-their material stiffness is one symmetric rank-17 update S^T (sum_g M_g^T C_g M_g) S per element. Evaluation
-points that no row uses are skipped.
+the other rows ("nonlocal": membrane and shear with tying on) are factored exactly, A_nl = M E, through a
+minimal set of parameters E: the independent sampled combinations at each point (e_rr, e_ss, e_rs at a membrane
+tying point, e_qt on the hypotenuse, ...), then reduced to a basis of what the rows use (the element means of
+the "mean" membrane tying combine samples of seven points: 9 membrane and 8 shear parameters for MITC6 with
+either scheme). Their material stiffness is one symmetric rank-17 update S^T (sum_g M_g^T C_g M_g) S per
+element; the rows S_k of the membrane parameters (rotation-free) are W_k x, constant 6 x 6 matrices W_k of
+the shape functions times the nodal positions. Evaluation points that no row uses are skipped.
 
 SO(3): ``flexbody.lie.kernels.log_into`` and ``kernels.coefficients`` (closed forms above the series switch);
 below the switch the coefficients are the same Taylor series ``so3.SERIES``, evaluated fused, once per point.
@@ -32,17 +35,24 @@ The tangent-operator derivatives are the formulas of ``kernels.d_tangent_into`` 
 ``d2_tangent_into`` written with these precomputed coefficients (a point needs up to eight of them).
 
 Performance notes: the small helpers are inlined at numba-IR level so that the per-point functions contain no
-calls and numba's reference-count pruning removes every incref/decref (an atomic operation) from them; the
-element loop runs inside one function per parallel chunk, whose workspaces are allocated once per chunk
-(a few chunks per thread). Nothing is allocated per element or point. The section stiffness must be symmetric.
+calls; the kernels are compiled without reference counting and with noalias array arguments (see _FLAGS), so
+that point data are read through views of the per-point arrays at no cost; the element loop runs inside one
+function per parallel chunk, whose workspaces are allocated once per chunk (a few chunks per thread), and
+prefetches the next element's data. Nothing is allocated per element or point. The section stiffness must be
+symmetric.
 """
 
 from __future__ import annotations
 
 import math
 
+import llvmlite.binding
 import numba
+import numba.core.cgutils
+import numba.core.compiler
 import numba.core.cpu
+import numba.core.options
+import numba.extending
 import numpy as np
 from numba import prange
 
@@ -60,9 +70,47 @@ NDOF = 36
 _FLAGS = dict(cache=True, error_model="numpy", fastmath={"contract"})
 if hasattr(numba.core.cpu.CPUTargetOptions, "_nrt"):
     _FLAGS["_nrt"] = False
+# No two array arguments of a kernel overlap (workspaces are distinct arrays, inputs are only read): their data
+# pointers are declared ``noalias`` (numba's own compiler flag, set by its parfors lowering; not a jit option,
+# so it is mapped here). Without it LLVM must assume that every store may change every array: it reloads
+# values and guards the vector loops with run-time overlap checks (the kernel is 20 % slower).
+if hasattr(numba.core.compiler.Flags, "noalias") and hasattr(numba.core.options.TargetOptions, "Mapping"):
+    if not hasattr(numba.core.cpu.CPUTargetOptions, "_noalias"):
+        numba.core.cpu.CPUTargetOptions._noalias = numba.core.options.TargetOptions.Mapping("noalias")
+    _FLAGS["_noalias"] = True
 jit = numba.njit(**_FLAGS)
 inl = numba.njit(inline="always", **_FLAGS)
 _u = numba.uint64  # unsigned inner-loop indices with run-time bounds: lets LLVM vectorize the loops
+
+
+# llvm.prefetch is overloaded on the pointer type: "p0" with opaque pointers (LLVM >= 15), "p0i8" before
+_PREFETCH_NAME = "llvm.prefetch.p0" if llvmlite.binding.llvm_version_info >= (15,) else "llvm.prefetch.p0i8"
+
+
+@numba.extending.intrinsic
+def _prefetch(typingctx, arr, idx, write):
+    """Prefetch (into L2) the cache line of element idx of arr's data (flat index), to read or, write=True, to write.
+
+    A hint only (never faults, changes no result): the element loop prefetches the data of the elements ahead.
+    """
+    if not (isinstance(arr, numba.types.Array) and isinstance(idx, numba.types.Integer)
+            and isinstance(write, numba.types.BooleanLiteral)):
+        return None
+    rw = 1 if write.literal_value else 0
+
+    def codegen(context, builder, signature, args):
+        from llvmlite import ir
+        ary = context.make_array(signature.args[0])(context, builder, args[0])
+        i8p = ir.IntType(8).as_pointer()
+        i32 = ir.IntType(32)
+        size = context.get_abi_sizeof(context.get_data_type(signature.args[0].dtype))
+        ptr = builder.gep(builder.bitcast(ary.data, i8p), [builder.mul(args[1], ir.Constant(args[1].type, size))])
+        fnty = ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32])
+        fn = numba.core.cgutils.get_or_insert_function(builder.module, fnty, _PREFETCH_NAME)
+        builder.call(fn, [ptr, ir.Constant(i32, rw), ir.Constant(i32, 2), ir.Constant(i32, 1)])
+        return context.get_dummy_value()
+
+    return numba.types.void(arr, idx, write), codegen
 
 _EN = np.ascontiguousarray(EVAL_N, dtype=np.float64)     # (17, 6)
 _EDN = np.ascontiguousarray(EVAL_DN, dtype=np.float64)   # (17, 2, 6)
@@ -81,10 +129,10 @@ _U0, _U1, _V0, _V, _W0, _W1 = 0, 1, 2, 3, 4, 5
 # z is stored component-major and padded to 8 lanes: dx_I[c] at 8c + I, (dtheta_0, dd_I)[c] at 24 + 8c + I
 NZ = 48
 _ZR = 24
-# The tangent in z is accumulated on a pattern: translation rows in all columns, rotation rows from column _KR;
-# only the upper triangle of the symmetric part and the rotation-rotation block are used, the rest is
+# The tangent in z is accumulated on a pattern: the translation rows of component c from column 8c (the upper
+# block triangle of the symmetric part), the rotation rows in the rotation columns from _KR; the rest is
 # overwritten by the mirror in _finish_tangent.
-_KR = 16
+_KR = 24
 
 
 def _slot_weights() -> np.ndarray:
@@ -364,6 +412,33 @@ def _node_setup(fr, dn, Ti, ninv, M):
 # ----------------------------------------------------------------------------------------------------------
 
 
+@inl
+def _prefetch_block(a, start, n, write):
+    """Prefetch the elements start .. start + n - 1 of a (flat): one hint per cache line, and the last one."""
+    for q in range(start, start + n, 8):
+        _prefetch(a, q, write)
+    _prefetch(a, start + n - 1, write)
+
+
+_AHEAD = 2   # elements prefetched ahead (a few microseconds each)
+
+
+@jit
+def _prefetch_element(e, x_el, fr_el, e_ref, to_cart, weights, want_tangent, K):
+    """Prefetch the inputs (and the tangent, to be written) of element e, ahead of its evaluation.
+
+    The element data are read (written) once, in bursts of a few kB per element that the hardware prefetchers
+    miss: without the hints the reads of to_cart alone stall for about 1 us per element.
+    """
+    _prefetch_block(x_el, 18 * e, 18, False)
+    _prefetch_block(fr_el, 54 * e, 54, False)
+    _prefetch_block(e_ref, 8 * N_EVAL * e, 8 * N_EVAL, False)
+    _prefetch_block(to_cart, 64 * N_GAUSS * e, 64 * N_GAUSS, False)
+    _prefetch_block(weights, N_GAUSS * e, N_GAUSS, False)
+    if want_tangent:
+        _prefetch_block(K, NDOF * NDOF * e, NDOF * NDOF, True)
+
+
 @jit
 def _load_element(e, x_el, fr_el, x, fr):
     for i in range(6):
@@ -467,14 +542,22 @@ def _strains_points(e, used, e_ref, PF, Pe):
         Pe[p, 7] = F[1, 2] - e_ref[e, p, 7]
 
 
-@jit
-def _gauss_strains(e, to_cart, nz_g, nz_i, nz_p, nz_j, nz_v, Pe, cov, out):
-    """Assumed covariant strains at the Gauss points and their Cartesian components out[e] (7, 8)."""
+@inl
+def _assumed_cov(a_ptr, a_p, a_j, a_v, Pe, cov):
+    """cov[g, i] = sum_pj A[g, i, p, j] Pe[p, j] (A by rows: a_ptr over g * 8 + i)."""
     for gg in range(N_GAUSS):
         for i in range(8):
-            cov[gg, i] = 0.0
-    for q in range(nz_g.shape[0]):
-        cov[nz_g[q], nz_i[q]] += nz_v[q] * Pe[nz_p[q], nz_j[q]]
+            r = 8 * gg + i
+            acc = 0.0
+            for q in range(a_ptr[r], a_ptr[r + 1]):
+                acc += a_v[q] * Pe[a_p[q], a_j[q]]
+            cov[gg, i] = acc
+
+
+@jit
+def _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, out):
+    """Assumed covariant strains at the Gauss points and their Cartesian components out[e] (7, 8)."""
+    _assumed_cov(a_ptr, a_p, a_j, a_v, Pe, cov)
     for gg in range(N_GAUSS):
         for r in range(8):
             acc = 0.0
@@ -484,16 +567,13 @@ def _gauss_strains(e, to_cart, nz_g, nz_i, nz_p, nz_j, nz_v, Pe, cov, out):
 
 
 @jit
-def _stress_weights(e, used, to_cart, weights, C, Ch, use_ch, nz_g, nz_i, nz_p, nz_j, nz_v, Pe, cov, st, v16, Ps):
+def _stress_weights(e, used, to_cart, weights, C, Ch, use_ch, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
+                    Pe, cov, st, v16, Ps):
     """Covariant stress weights Ps[p] = sum_g w_g (T_g A_g)^T C T_g A_g e at the used points.
 
     With use_ch the covariant sections Ch_g = w_g T_g^T C T_g (already formed for the tangent) are used.
     """
-    for gg in range(N_GAUSS):
-        for i in range(8):
-            cov[gg, i] = 0.0
-    for q in range(nz_g.shape[0]):
-        cov[nz_g[q], nz_i[q]] += nz_v[q] * Pe[nz_p[q], nz_j[q]]
+    _assumed_cov(a_ptr, a_p, a_j, a_v, Pe, cov)
     for gg in range(N_GAUSS):
         if use_ch:
             for r in range(8):
@@ -521,9 +601,11 @@ def _stress_weights(e, used, to_cart, weights, C, Ch, use_ch, nz_g, nz_i, nz_p, 
     for k in range(used.shape[0]):
         p = used[k]
         for j in range(8):
-            Ps[p, j] = 0.0
-    for q in range(nz_g.shape[0]):
-        Ps[nz_p[q], nz_j[q]] += nz_v[q] * st[nz_g[q], nz_i[q]]
+            c = 8 * p + j
+            acc = 0.0
+            for q in range(at_ptr[c], at_ptr[c + 1]):
+                acc += at_v[q] * st[at_g[q], at_i[q]]
+            Ps[p, j] = acc
 
 
 @inl
@@ -625,7 +707,7 @@ def _GT_times(G2, grow, F, Q, T, R, X0, X1, out, orow):
 
 @inl
 def _load_point(p, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s):
-    """Copy the data of point p into whole small arrays (no array views inside the point loops)."""
+    """Copy the data of point p into whole small arrays."""
     for c in range(3):
         d[c] = Pd[p, c]
         da[0, c] = Pda[p, 0, c]
@@ -670,17 +752,17 @@ def _expand_vec(V, vrow, p, out, orow):
 
 
 @jit
-def _force_points(used, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz):
+def _force_points(used, PF, PQ, PT, PR, PX, Ps, g, G2, phi, fz):
     """fz (z, row 0) = sum_p Pi_p^T G_xi^T D^T s_p."""
     for r in range(NZ):
         fz[0, r] = 0.0
     for k in range(used.shape[0]):
         p = used[k]
-        _load_point(p, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s)
-        _strain_gradient_T(F, s, g)
+        F = PF[p]
+        _strain_gradient_T(F, Ps[p], g)
         for c in range(12):
             G2[0, c] = g[c]
-        _GT_times(G2, 0, F, Q, T, R, X0, X1, phi, 0)
+        _GT_times(G2, 0, F, PQ[p], PT[p], PR[p], PX[p, 0], PX[p, 1], phi, 0)
         _expand_vec(phi, 0, p, fz, 0)
 
 
@@ -835,12 +917,61 @@ def _geometric_core(s, g, F, Q, T, R, X0, X1, d, da, co, core, ns, with_uu, t0, 
 # ----------------------------------------------------------------------------------------------------------
 
 
+_BLOCK0 = np.array([0, 3, 6, 8], np.int64)   # strain blocks: membrane, bending, shear
+
+
+def _section_blocks(C: np.ndarray) -> np.ndarray:
+    """(3, 3) flags: does the section couple strain blocks a and b (membrane, bending, shear)?"""
+    return np.array([[np.any(C[_BLOCK0[a]:_BLOCK0[a + 1], _BLOCK0[b]:_BLOCK0[b + 1]] != 0.0) for b in range(3)]
+                     for a in range(3)], np.int64)
+
+
+@inl
+def _block_cov(e, gg, to_cart, C, cblk, a, b, w, Ch):
+    """Ch_g[block a, block b] = w T_a^T C_ab T_b (zero without coupling) for a block diagonal T_g."""
+    a0 = 3 * a
+    b0 = 3 * b
+    na = 3 if a < 2 else 2
+    nb = 3 if b < 2 else 2
+    if cblk[a, b] == 0:
+        for i in range(na):
+            for j in range(nb):
+                Ch[gg, a0 + i, b0 + j] = 0.0
+        return
+    for i in range(na):
+        for j in range(nb):
+            acc = 0.0
+            for k in range(na):
+                ct = 0.0
+                for m in range(nb):
+                    ct += C[a0 + k, b0 + m] * to_cart[e, gg, b0 + m, b0 + j]
+                acc += to_cart[e, gg, a0 + k, a0 + i] * ct
+            Ch[gg, a0 + i, b0 + j] = w * acc
+
+
 @jit
-def _section_cov(e, to_cart, weights, C, CT, Ch):
-    """Covariant section per Gauss point: Ch_g = w_g T_g^T C T_g (zero entries of C and T_g skipped)."""
+def _section_cov(e, to_cart, weights, C, cblk, CT, Ch):
+    """Covariant section per Gauss point: Ch_g = w_g T_g^T C T_g.
+
+    T_g (to_cart) maps each strain block (membrane, bending, shear) to itself on reference elements (block
+    diagonal): then only the blocks of C that are nonzero (cblk) are transformed. Otherwise the dense product.
+    """
     n8 = _u(CT.shape[1])
     for gg in range(N_GAUSS):
         w = weights[e, gg]
+        off = 0.0
+        for r in range(3):
+            for c in range(3, 8):
+                off += abs(to_cart[e, gg, r, c]) + abs(to_cart[e, gg, c, r])
+        for r in range(3, 6):
+            for c in range(6, 8):
+                off += abs(to_cart[e, gg, r, c]) + abs(to_cart[e, gg, c, r])
+        if off == 0.0:
+            for a in range(3):
+                _block_cov(e, gg, to_cart, C, cblk, a, 0, w, Ch)
+                _block_cov(e, gg, to_cart, C, cblk, a, 1, w, Ch)
+                _block_cov(e, gg, to_cart, C, cblk, a, 2, w, Ch)
+            continue
         for r in range(8):
             for c in range(_u(0), n8):
                 CT[r, c] = 0.0
@@ -870,8 +1001,9 @@ def _expand_core(core, ns, p, Y, Kz):
     nr = 3 * ns
     nz = _u(Kz.shape[1])     # run-time trip counts (48, 8): see _u
     n8 = nz // _u(6)
-    # stage 1: Y = core Pi (nr x NZ)
-    for r in range(nr):
+    # stage 1: Y = core Pi (nr x NZ); the rotation-slot rows only in the rotation columns (their translation
+    # columns would land in the rotation-translation block of Kz, which _finish_tangent mirrors)
+    for r in range(6):
         a0 = core[r, 0]
         a1 = core[r, 1]
         a2 = core[r, 2]
@@ -906,6 +1038,30 @@ def _expand_core(core, ns, p, Y, Kz):
             Y[r, 24 + i] = p2 * c0 + p3 * d0 + p4 * e0 + p5 * f0
             Y[r, 32 + i] = p2 * c1 + p3 * d1 + p4 * e1 + p5 * f1
             Y[r, 40 + i] = p2 * c2 + p3 * d2 + p4 * e2 + p5 * f2
+    for r in range(6, nr):
+        c0 = core[r, 6]
+        c1 = core[r, 7]
+        c2 = core[r, 8]
+        d0 = core[r, 9]
+        d1 = core[r, 10]
+        d2 = core[r, 11]
+        if ns == 6:
+            e0 = core[r, 12]
+            e1 = core[r, 13]
+            e2 = core[r, 14]
+            f0 = core[r, 15]
+            f1 = core[r, 16]
+            f2 = core[r, 17]
+        else:
+            e0 = e1 = e2 = f0 = f1 = f2 = 0.0
+        for i in range(_u(0), n8):
+            p2 = _PI8[p, 2, i]
+            p3 = _PI8[p, 3, i]
+            p4 = _PI8[p, 4, i]
+            p5 = _PI8[p, 5, i]
+            Y[r, 24 + i] = p2 * c0 + p3 * d0 + p4 * e0 + p5 * f0
+            Y[r, 32 + i] = p2 * c1 + p3 * d1 + p4 * e1 + p5 * f1
+            Y[r, 40 + i] = p2 * c2 + p3 * d2 + p4 * e2 + p5 * f2
     # stage 2, translation rows of component c (sources U0, U1)
     a00 = _PI8[p, 0, 0]
     a01 = _PI8[p, 0, 1]
@@ -921,7 +1077,7 @@ def _expand_core(core, ns, p, Y, Kz):
     a15 = _PI8[p, 1, 5]
     for c in range(3):
         b = 8 * c
-        for k in range(_u(0), nz):
+        for k in range(_u(b), nz):
             y0 = Y[c, k]
             y1 = Y[3 + c, k]
             Kz[b, k] += a00 * y0 + a10 * y1
@@ -1102,7 +1258,7 @@ def _rank_update_block(Kz, b, k0, S, W, a):
 @jit
 def _points_tangent(used, pt_gauss, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
                     loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
-                    F, Q, T, R, X0, X1, d, da, co, s, g, core, Y, Kz, Kiso, Dl, Bl, CBl, t0, t1, t2, t3, t4, t5):
+                    g, core, Y, Kz, Kiso, Dl, Bl, CBl, t0, t1, t2, t3, t4, t5):
     """Kz = sum over points of Pi^T [G^T Hf G + H (+ local material rows)] Pi (pattern of _expand_core).
 
     At points without local material rows the translation-translation block of the core is A_ab I_3
@@ -1113,23 +1269,33 @@ def _points_tangent(used, pt_gauss, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
     for r in range(NZ):
         for c in range(NZ):
             Kz[r, c] = 0.0
+    n8 = _u(Kiso.shape[1])
     for i in range(6):
-        for j in range(6):
+        for j in range(_u(0), n8):
             Kiso[i, j] = 0.0
     for k in range(used.shape[0]):
         p = used[k]
-        _load_point(p, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s)
+        F = PF[p]
+        Q = PQ[p]
+        T = PT[p]
+        R = PR[p]
+        X0 = PX[p, 0]
+        X1 = PX[p, 1]
+        d = Pd[p]
+        da = Pda[p]
+        co = Pco[p]
+        s = Ps[p]
         gg = pt_gauss[p]
         bend = s[3] != 0.0 or s[4] != 0.0 or s[5] != 0.0
         if gg < 0:
             h2 = 0.5 * s[2]
             for i in range(6):
-                a0 = _EDN[p, 0, i]
-                a1 = _EDN[p, 1, i]
-                for j in range(6):
-                    b0 = _EDN[p, 0, j]
-                    b1 = _EDN[p, 1, j]
-                    Kiso[i, j] += s[0] * a0 * b0 + s[1] * a1 * b1 + h2 * (a0 * b1 + a1 * b0)
+                a0 = _PI8[p, 0, i]
+                a1 = _PI8[p, 1, i]
+                u = s[0] * a0 + h2 * a1
+                v = s[1] * a1 + h2 * a0
+                for j in range(_u(0), n8):
+                    Kiso[i, j] += u * _PI8[p, 0, j] + v * _PI8[p, 1, j]
             if not bend and s[6] == 0.0 and s[7] == 0.0:
                 continue
         _strain_gradient_T(F, s, g)
@@ -1148,11 +1314,6 @@ def _points_tangent(used, pt_gauss, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
             for li in range(nl):
                 _GT_times(Dl, li, F, Q, T, R, X0, X1, Bl, li)
             n18 = _u(Bl.shape[1])
-            nl4 = 4 * ((nl + 3) // 4)
-            for li in range(nl, nl4):      # zero rows up to a multiple of four
-                for c in range(_u(0), n18):
-                    Bl[li, c] = 0.0
-                    CBl[li, c] = 0.0
             for li in range(nl):
                 for c in range(_u(0), n18):
                     CBl[li, c] = 0.0
@@ -1160,36 +1321,90 @@ def _points_tangent(used, pt_gauss, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
                     w = Ch[gg, loc_rows[gg, li], loc_rows[gg, lj]]
                     for c in range(_u(0), n18):
                         CBl[li, c] += w * Bl[lj, c]
-            # core += Bl^T CBl, six core rows and four B rows per loop
-            for a in range(0, nl4, 4):
-                for b in range(0, 18, 6):
-                    _rank_update_block(core, b, _u(0), Bl, CBl, a)
+            # core += Bl^T CBl, row by row with four (three, one) B rows per loop
+            for r in range(18):
+                a = 0
+                while a + 4 <= nl:
+                    b0 = Bl[a, r]
+                    b1 = Bl[a + 1, r]
+                    b2 = Bl[a + 2, r]
+                    b3 = Bl[a + 3, r]
+                    for c in range(_u(0), n18):
+                        core[r, c] += b0 * CBl[a, c] + b1 * CBl[a + 1, c] + b2 * CBl[a + 2, c] + b3 * CBl[a + 3, c]
+                    a += 4
+                if a + 3 <= nl:
+                    b0 = Bl[a, r]
+                    b1 = Bl[a + 1, r]
+                    b2 = Bl[a + 2, r]
+                    for c in range(_u(0), n18):
+                        core[r, c] += b0 * CBl[a, c] + b1 * CBl[a + 1, c] + b2 * CBl[a + 2, c]
+                    a += 3
+                while a < nl:
+                    b0 = Bl[a, r]
+                    for c in range(_u(0), n18):
+                        core[r, c] += b0 * CBl[a, c]
+                    a += 1
         _expand_core(core, ns, p, Y, Kz)
 
 
+@inl
+def _expand_vec_scaled(V, vrow, alpha, p, out, orow):
+    """out[orow] (z, NZ) += alpha Pi_p^T V[vrow] (18 slot components)."""
+    n8 = _u(out.shape[1]) // _u(6)
+    for c in range(3):
+        u0 = alpha * V[vrow, c]
+        u1 = alpha * V[vrow, 3 + c]
+        r0 = alpha * V[vrow, 6 + c]
+        rv = alpha * V[vrow, 9 + c]
+        w0 = alpha * V[vrow, 12 + c]
+        w1 = alpha * V[vrow, 15 + c]
+        ot = 8 * c
+        orot = _ZR + 8 * c
+        for i in range(_u(0), n8):
+            out[orow, ot + i] += _PI8[p, 0, i] * u0 + _PI8[p, 1, i] * u1
+            out[orow, orot + i] += (_PI8[p, 2, i] * r0 + _PI8[p, 3, i] * rv + _PI8[p, 4, i] * w0
+                                    + _PI8[p, 5, i] * w1)
+
+
 @jit
-def _nonlocal_material(par_p, par_ptr, par_j, par_v, par_rf, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
-                       PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
-                       F, Q, T, R, X0, X1, d, da, co, s, G2, phi, Sp, Wp, Cp, Yp, Kz):
-    """Kz += S^T C_par S: parameters S (z rows) and C_par = sum_g M_g^T Ch_g[nl, nl] M_g (pattern of Kz)."""
-    npar = par_p.shape[0]
-    loaded = -1
-    for kp in range(npar):
+def _nonlocal_material(x, par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
+                       nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
+                       PF, PQ, PT, PR, PX, Ch, G2, phi, Sp, Wp, Cp, Yp, Kz):
+    """Kz += S^T C_par S: parameters S (z rows) and C_par = sum_g M_g^T Ch_g[nl, nl] M_g (pattern of Kz).
+
+    The first n_rf parameters are rotation-free (membrane combinations): S_k = W_k x (translations only, W_k
+    constant 6 x 6 from the shape functions). The others get the rotation-free part W_k x plus combinations
+    of point rows Pi_p^T G_p^T D_p^T v (the point parameters par_*, pl_* their weights in S).
+    """
+    npar = has_w.shape[0]
+    nz = _u(Kz.shape[1])
+    n_rows = Sp.shape[0]
+    for a in range(n_rows):
+        for c in range(_u(0), nz):
+            Sp[a, c] = 0.0
+            Wp[a, c] = 0.0
+    for k in range(npar):
+        if has_w[k]:
+            for c in range(3):
+                x0 = x[0, c]
+                x1 = x[1, c]
+                x2 = x[2, c]
+                x3 = x[3, c]
+                x4 = x[4, c]
+                x5 = x[5, c]
+                for i in range(6):
+                    Sp[k, 8 * c + i] = (w2[k, i, 0] * x0 + w2[k, i, 1] * x1 + w2[k, i, 2] * x2
+                                        + w2[k, i, 3] * x3 + w2[k, i, 4] * x4 + w2[k, i, 5] * x5)
+    for kp in range(par_p.shape[0]):
         p = par_p[kp]
-        if p != loaded:
-            _load_point(p, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s)
-            loaded = p
+        F = PF[p]
         for c in range(12):
             G2[0, c] = 0.0
         for q in range(par_ptr[kp], par_ptr[kp + 1]):
             _add_strain_gradient_row(F, par_j[q], par_v[q], G2, 0)
-        _GT_times(G2, 0, F, Q, T, R, X0, X1, phi, 0)
-        if par_rf[kp]:
-            for c in range(6, 18):   # membrane combinations: rotation-free (their rotation slots are round-off)
-                phi[0, c] = 0.0
-        for c in range(NZ):
-            Sp[kp, c] = 0.0
-        _expand_vec(phi, 0, p, Sp, kp)
+        _GT_times(G2, 0, F, PQ[p], PT[p], PR[p], PX[p, 0], PX[p, 1], phi, 0)
+        for q in range(pl_ptr[kp], pl_ptr[kp + 1]):
+            _expand_vec_scaled(phi, 0, pl_v[q], p, Sp, pl_k[q])
     for a in range(npar):
         for b in range(npar):
             Cp[a, b] = 0.0
@@ -1197,52 +1412,53 @@ def _nonlocal_material(par_p, par_ptr, par_j, par_v, par_rf, nl_rows, n_nl, m_pt
         nn = n_nl[gg]
         if nn == 0:
             continue
+        # Yp = Ch_g[nl, nl] M_g (rows of M_g dense in m_dense) ; Cp += M_g^T Yp
         for li in range(nn):
-            for b in range(npar):
+            for b in range(_u(0), _u(npar)):
                 Yp[li, b] = 0.0
-        # Yp = Ch_g[nl, nl] M_g ; Cp += M_g^T Yp
-        for q in range(m_ptr[gg], m_ptr[gg + 1]):
-            v = m_v[q]
-            col = nl_rows[gg, m_i[q]]
-            b = m_k[q]
-            for li in range(nn):
-                Yp[li, b] += v * Ch[gg, nl_rows[gg, li], col]
+            for lj in range(nn):
+                w = Ch[gg, nl_rows[gg, li], nl_rows[gg, lj]]
+                if w != 0.0:
+                    for b in range(_u(0), _u(npar)):
+                        Yp[li, b] += w * m_dense[gg, lj, b]
         for q in range(m_ptr[gg], m_ptr[gg + 1]):
             v = m_v[q]
             a = m_k[q]
             li = m_i[q]
             for b in range(_u(0), _u(npar)):
                 Cp[a, b] += v * Yp[li, b]
-    # Wp = Cp Sp ; Kz += Sp^T Wp on the pattern of _expand_core (rows padded to a multiple of four)
-    nz = _u(Kz.shape[1])
-    np4 = 4 * ((npar + 3) // 4)
-    for a in range(npar, np4):
-        for c in range(_u(0), nz):
-            Sp[a, c] = 0.0
-            Wp[a, c] = 0.0
+    # Wp = Cp Sp (rotation columns only from the parameters with rotations)
     for a in range(npar):
-        for c in range(_u(0), nz):
-            Wp[a, c] = 0.0
         for b in range(0, npar - 3, 4):
             w0 = Cp[a, b]
             w1 = Cp[a, b + 1]
-            w2 = Cp[a, b + 2]
+            w2_ = Cp[a, b + 2]
             w3 = Cp[a, b + 3]
-            for c in range(_u(0), nz):
-                Wp[a, c] += w0 * Sp[b, c] + w1 * Sp[b + 1, c] + w2 * Sp[b + 2, c] + w3 * Sp[b + 3, c]
+            for c in range(_u(0), _u(_ZR)):
+                Wp[a, c] += w0 * Sp[b, c] + w1 * Sp[b + 1, c] + w2_ * Sp[b + 2, c] + w3 * Sp[b + 3, c]
         for b in range(4 * (npar // 4), npar):
             w0 = Cp[a, b]
-            for c in range(_u(0), nz):
+            for c in range(_u(0), _u(_ZR)):
                 Wp[a, c] += w0 * Sp[b, c]
-    for a in range(0, np4, 4):
-        rot = False
-        for b in range(a, min(a + 4, npar)):
-            if not par_rf[b]:
-                rot = True
+        for b in range(n_rf, npar - 3, 4):
+            w0 = Cp[a, b]
+            w1 = Cp[a, b + 1]
+            w2_ = Cp[a, b + 2]
+            w3 = Cp[a, b + 3]
+            for c in range(_u(_ZR), nz):
+                Wp[a, c] += w0 * Sp[b, c] + w1 * Sp[b + 1, c] + w2_ * Sp[b + 2, c] + w3 * Sp[b + 3, c]
+        for b in range(max(n_rf, n_rf + 4 * ((npar - n_rf) // 4)), npar):
+            w0 = Cp[a, b]
+            for c in range(_u(_ZR), nz):
+                Wp[a, c] += w0 * Sp[b, c]
+    # Kz += Sp^T Wp on the pattern of _expand_core (groups of four rows, zero padded): translation rows from
+    # their own block on (the lower blocks are mirrored), rotation rows from the rotating parameters only
+    for a in range(0, npar, 4):
         for c in range(3):
-            _rank_update_block(Kz, 8 * c, _u(0), Sp, Wp, a)
-            if rot:
-                _rank_update_block(Kz, _ZR + 8 * c, _u(_KR), Sp, Wp, a)
+            _rank_update_block(Kz, 8 * c, _u(8 * c), Sp, Wp, a)
+    for a in range(n_rf, npar, 4):
+        for c in range(3):
+            _rank_update_block(Kz, _ZR + 8 * c, _u(_KR), Sp, Wp, a)
 
 
 @jit
@@ -1310,7 +1526,7 @@ def _cross_terms(loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v, nl_rows, n_nl, m
 
 
 @jit
-def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, K2, T0, K, Dp, Dm):
+def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, T0, K, Dp, Dm):
     """K[e] = P^T Kz P + (D P^T[.]) fz (Kz on the accumulation pattern: mirror the symmetric part first).
 
     Kiso (6 x 6) is the scalar translation-translation part accumulated separately (times I_3).
@@ -1353,8 +1569,8 @@ def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, K2, T0, K, Dp, Dm)
             K1[r, 3] = t0
             K1[r, 4] = t1
             K1[r, 5] = t2
-    # K2 = P^T K1 (per node: three output rows from three source rows in one loop)
-    n36 = _u(K2.shape[1])
+    # K[e] = P^T K1 (per node: three output rows from three source rows in one loop; theta_0 rows via T0)
+    n36 = _u(K.shape[2])
     for i in range(6):
         r00 = fr[i, 0, 0]
         r01 = fr[i, 0, 1]
@@ -1370,9 +1586,9 @@ def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, K2, T0, K, Dp, Dm)
             a = K1[i, k]
             b = K1[8 + i, k]
             t = K1[16 + i, k]
-            K2[o, k] = r00 * a + r10 * b + r20 * t
-            K2[o + 1, k] = r01 * a + r11 * b + r21 * t
-            K2[o + 2, k] = r02 * a + r12 * b + r22 * t
+            K[e, o, k] = r00 * a + r10 * b + r20 * t
+            K[e, o + 1, k] = r01 * a + r11 * b + r21 * t
+            K[e, o + 2, k] = r02 * a + r12 * b + r22 * t
     for k in range(_u(0), n36):
         T0[0, k] = K1[_ZR, k]
         T0[1, k] = K1[_ZR + 8, k]
@@ -1392,9 +1608,9 @@ def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, K2, T0, K, Dp, Dm)
             a = K1[_ZR + i, k]
             b = K1[_ZR + 8 + i, k]
             t = K1[_ZR + 16 + i, k]
-            K2[o, k] = t00 * a + t10 * b + t20 * t          # T_i^T
-            K2[o + 1, k] = t01 * a + t11 * b + t21 * t
-            K2[o + 2, k] = t02 * a + t12 * b + t22 * t
+            K[e, o, k] = t00 * a + t10 * b + t20 * t       # T_i^T
+            K[e, o + 1, k] = t01 * a + t11 * b + t21 * t
+            K[e, o + 2, k] = t02 * a + t12 * b + t22 * t
         for k in range(_u(0), n36):
             a = K1[_ZR + i, k]
             b = K1[_ZR + 8 + i, k]
@@ -1402,13 +1618,9 @@ def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, K2, T0, K, Dp, Dm)
             T0[0, k] -= t00 * a + t01 * b + t02 * t         # - T_i
             T0[1, k] -= t10 * a + t11 * b + t12 * t
             T0[2, k] -= t20 * a + t21 * b + t22 * t
-    for r in range(NDOF):
-        if r == 3 or r == 4 or r == 5:
-            for k in range(_u(0), n36):
-                K[e, r, k] = T0[r - 3, k]
-        else:
-            for k in range(_u(0), n36):
-                K[e, r, k] = K2[r, k]
+    for r in range(3):
+        for k in range(_u(0), n36):
+            K[e, 3 + r, k] = T0[r, k]
     # node terms: hat(f_u,I) in (u_I, theta_I) and the D T^-1 terms of Delta(delta d_I)
     for i in range(6):
         u0 = f[e, 6 * i]
@@ -1456,17 +1668,20 @@ def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, K2, T0, K, Dp, Dm)
 
 
 @jit
-def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C,
-           used, nz_g, nz_i, nz_p, nz_j, nz_v,
+def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
+           used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
            pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
-           par_p, par_ptr, par_j, par_v, par_rf, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
+           par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
+           nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
            want_tangent, f, K,
            x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps,
            F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz,
-           cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, K2, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
+           cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
            t0, t1, t2, t3, t4, t5):
     """Internal forces f[e] (and tangents K[e]) of the elements e0 <= e < e1."""
     for e in range(e0, e1):
+        if e + _AHEAD < e1:
+            _prefetch_element(e + _AHEAD, x_el, fr_el, e_ref, to_cart, weights, want_tangent, K)
         _load_element(e, x_el, fr_el, x, fr)
         _node_setup(fr, dn, Ti, ninv, t0)
         _interpolate_points(used, dn, Pd, Pda)
@@ -1474,35 +1689,37 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C,
         _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, True)
         _strains_points(e, used, e_ref, PF, Pe)
         if want_tangent:
-            _section_cov(e, to_cart, weights, C, CT, Ch)
-        _stress_weights(e, used, to_cart, weights, C, Ch, want_tangent, nz_g, nz_i, nz_p, nz_j, nz_v, Pe, cov, st,
-                        v16, Ps)
-        _force_points(used, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz)
+            _section_cov(e, to_cart, weights, C, cblk, CT, Ch)
+        _stress_weights(e, used, to_cart, weights, C, Ch, want_tangent, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
+                        Pe, cov, st, v16, Ps)
+        _force_points(used, PF, PQ, PT, PR, PX, Ps, g, G2, phi, fz)
         _force_to_local(e, fz, fr, Ti, f)
         if not want_tangent:
             continue
         _points_tangent(used, pt_gauss, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
                         loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
-                        F, Q, T, R, X0, X1, d, da, co, s, g, core, Y, Kz, Kiso, Dl, Bl, CBl, t0, t1, t2, t3, t4, t5)
-        if par_p.shape[0] > 0:
-            _nonlocal_material(par_p, par_ptr, par_j, par_v, par_rf, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
-                               PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
-                               F, Q, T, R, X0, X1, d, da, co, s, G2, phi, Sp, Wp, Cp, Yp, Kz)
+                        g, core, Y, Kz, Kiso, Dl, Bl, CBl, t0, t1, t2, t3, t4, t5)
+        if has_w.shape[0] > 0:
+            _nonlocal_material(x, par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
+                               nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
+                               PF, PQ, PT, PR, PX, Ch, G2, phi, Sp, Wp, Cp, Yp, Kz)
             if _has_cross_coupling(Ch, loc_rows, n_loc, nl_rows, n_nl):
                 _cross_terms(loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
                              Ch, Sp, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s,
                              Dl, Bl, Wp, Y, Yt, K1, Kz)
-        _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, K2, T0, K, t0, t1)
+        _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, T0, K, t0, t1)
 
 
 @numba.njit(cache=True, parallel=True)
-def _batch(x_el, fr_el, e_ref, to_cart, weights, C,
-           used, nz_g, nz_i, nz_p, nz_j, nz_v,
+def _batch(x_el, fr_el, e_ref, to_cart, weights, C, cblk,
+           used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
            pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
-           par_p, par_ptr, par_j, par_v, par_rf, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
+           par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
+           nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
            want_tangent, n_chunks, f, K):
     m = x_el.shape[0]
-    npar = max(par_p.shape[0], 1)
+    npar = max(has_w.shape[0], 1)
+    n_rows = max(4 * ((npar + 3) // 4), n_rf + 4 * ((npar - n_rf + 3) // 4))
     for ch in prange(n_chunks):
         # per-chunk workspaces (a few chunks per thread), reused for every element of the chunk
         x = np.empty((6, 3))
@@ -1544,14 +1761,13 @@ def _batch(x_el, fr_el, e_ref, to_cart, weights, C,
         Yt = np.empty((NZ, 18))
         Kz = np.empty((NZ, NZ))
         K1 = np.empty((NZ, NZ))
-        K2 = np.empty((NDOF, NDOF))
         T0 = np.empty((3, NDOF))
-        Kiso = np.empty((6, 6))
+        Kiso = np.empty((6, 8))
         Dl = np.empty((8, 12))
         Bl = np.empty((8, 18))
         CBl = np.empty((8, 18))
-        Sp = np.empty((4 * ((npar + 3) // 4), NZ))
-        Wp = np.empty((max(4 * ((npar + 3) // 4), 8), NZ))
+        Sp = np.empty((n_rows, NZ))
+        Wp = np.empty((max(n_rows, 8), NZ))
         Cp = np.empty((npar, npar))
         Yp = np.empty((8, npar))
         t0 = np.empty((3, 3))
@@ -1560,19 +1776,20 @@ def _batch(x_el, fr_el, e_ref, to_cart, weights, C,
         t3 = np.empty((3, 3))
         t4 = np.empty((3, 3))
         t5 = np.empty((3, 3))
-        _chunk((ch * m) // n_chunks, ((ch + 1) * m) // n_chunks, x_el, fr_el, e_ref, to_cart, weights, C,
-               used, nz_g, nz_i, nz_p, nz_j, nz_v,
+        _chunk((ch * m) // n_chunks, ((ch + 1) * m) // n_chunks, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
+               used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
                pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
-               par_p, par_ptr, par_j, par_v, par_rf, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
+               par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
+               nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
                want_tangent, f, K,
                x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps,
                F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz,
-               cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, K2, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
+               cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
                t0, t1, t2, t3, t4, t5)
 
 
 @jit
-def _chunk_strains(e0, e1, x_el, fr_el, e_ref, to_cart, used, nz_g, nz_i, nz_p, nz_j, nz_v, out,
+def _chunk_strains(e0, e1, x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, out,
                    x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, cov, t0):
     for e in range(e0, e1):
         _load_element(e, x_el, fr_el, x, fr)
@@ -1581,11 +1798,11 @@ def _chunk_strains(e0, e1, x_el, fr_el, e_ref, to_cart, used, nz_g, nz_i, nz_p, 
         _point_coefficients(used, Pd, Pco)
         _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, False)
         _strains_points(e, used, e_ref, PF, Pe)
-        _gauss_strains(e, to_cart, nz_g, nz_i, nz_p, nz_j, nz_v, Pe, cov, out)
+        _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, out)
 
 
 @numba.njit(cache=True, parallel=True)
-def _batch_strains(x_el, fr_el, e_ref, to_cart, used, nz_g, nz_i, nz_p, nz_j, nz_v, n_chunks, out):
+def _batch_strains(x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, n_chunks, out):
     m = x_el.shape[0]
     for ch in prange(n_chunks):
         x = np.empty((6, 3))
@@ -1605,8 +1822,8 @@ def _batch_strains(x_el, fr_el, e_ref, to_cart, used, nz_g, nz_i, nz_p, nz_j, nz
         cov = np.empty((N_GAUSS, 8))
         t0 = np.empty((3, 3))
         _chunk_strains((ch * m) // n_chunks, ((ch + 1) * m) // n_chunks, x_el, fr_el, e_ref, to_cart, used,
-                       nz_g, nz_i, nz_p, nz_j, nz_v, out, x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX,
-                       Pe, cov, t0)
+                       a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, out, x, fr, dn, Ti, ninv, Pd, Pda, Pco,
+                       PQ, PT, PR, PF, PX, Pe, cov, t0)
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -1639,11 +1856,15 @@ def _row_basis(M: np.ndarray, tol: float) -> np.ndarray:
 class CompressedMaps:
     """Sparse form of an assumed-strain map A (7, 8, 17, 8) for the kernels (see the module docstring).
 
-    * all nonzeros (g, i, p, j, v): strains and the pull-back of the stress resultants;
+    * all nonzeros (g, i, p, j, v), by rows (g, i) and by columns (p, j): strains and the pull-back of the
+      stress resultants;
     * local rows of each Gauss point (entries referring only to the point itself): in the point's slots;
-    * nonlocal rows: A_nl = M E, E the row-echelon bases of the sampled components used at each point
-      ("parameters", e.g. e_qq = (e_rr + e_ss)/2 - e_rs at a hypotenuse tying point), M the sparse
-      combination per Gauss point row. The factorization is verified to round-off.
+    * nonlocal rows: A_nl = M E with parameters E = L E1: E1 the row-echelon bases of the sampled components
+      used at each point (e.g. e_qq = (e_rr + e_ss)/2 - e_rs at a hypotenuse tying point), L the row-echelon
+      basis of the combinations of them that the rows use (fewer when rows share combinations of several
+      points, as the element means of the "mean" tying do; L = I otherwise), M the sparse combination per
+      Gauss point row. Rotation-free parameters (membrane only) come first and get their rows as W_k x.
+      The factorizations are verified to round-off.
     """
 
     def __init__(self, A: np.ndarray) -> None:
@@ -1654,8 +1875,13 @@ class CompressedMaps:
             raise ValueError("A must be finite")
         g, i, p, j = np.nonzero(A)
         v = A[g, i, p, j]
-        self.nz_g, self.nz_i, self.nz_p, self.nz_j = (a.astype(np.int64) for a in (g, i, p, j))
-        self.nz_v = v.astype(np.float64)
+        # A by rows (g, i) and by columns (p, j), each in the order of the other index (sums as in the reference)
+        self.a_ptr = np.searchsorted(8 * g + i, np.arange(8 * N_GAUSS + 1)).astype(np.int64)
+        self.a_p, self.a_j, self.a_v = p.astype(np.int64), j.astype(np.int64), v.astype(np.float64)
+        by_col = np.argsort(8 * p + j, kind="stable")
+        self.at_ptr = np.searchsorted((8 * p + j)[by_col], np.arange(8 * N_EVAL + 1)).astype(np.int64)
+        self.at_g, self.at_i = g[by_col].astype(np.int64), i[by_col].astype(np.int64)
+        self.at_v = v[by_col].astype(np.float64)
         self.used = np.unique(p).astype(np.int64)
         own = GAUSS_OFFSET + np.arange(N_GAUSS)
         # a row of Gauss point g is local when all its entries refer to g's own evaluation point
@@ -1697,7 +1923,8 @@ class CompressedMaps:
         A_nl = np.array([A[gg, r].ravel() for gg, r in row_of]).reshape(len(row_of), N_EVAL * 8)
         scale = np.abs(A_nl).max() if A_nl.size else 1.0
         tol = 1e-12 * scale
-        E_rows, par_p = [], []
+        # point parameters E1: row-echelon bases of the sampled components used at each point
+        E_rows, pt_of = [], []
         for pp in range(N_EVAL):
             sub = A_nl[:, 8 * pp:8 * pp + 8] if A_nl.size else np.zeros((0, 8))
             if not np.any(np.abs(sub) > tol):
@@ -1706,31 +1933,71 @@ class CompressedMaps:
                 full = np.zeros(N_EVAL * 8)
                 full[8 * pp:8 * pp + 8] = row
                 E_rows.append(full)
-                par_p.append(pp)
-        E = np.array(E_rows).reshape(len(E_rows), N_EVAL * 8)
-        # rotation-free (membrane) combinations first: groups of four of them skip the rotation rows
-        rot_free = np.array([bool(np.all(np.flatnonzero(row) % 8 < 3)) for row in E], bool)
-        order = np.argsort(~rot_free, kind="stable")
-        E, rot_free = E[order], rot_free[order]
-        par_p = [par_p[k] for k in order]
-        self.par_rf = rot_free.astype(np.int64)
-        if len(E_rows):
-            M = np.linalg.lstsq(E.T, A_nl.T, rcond=None)[0].T       # A_nl = M E
-            M[np.abs(M) <= 1e-14 * np.abs(M).max()] = 0.0
-            if np.abs(M @ E - A_nl).max() > 1e-13 * scale:
+                pt_of.append(pp)
+        E1 = np.array(E_rows).reshape(len(E_rows), N_EVAL * 8)
+        pt_of = np.array(pt_of, np.int64)
+        # rotation-free (membrane) point parameters first
+        rf1 = np.array([bool(np.all(np.flatnonzero(row) % 8 < 3)) for row in E1], bool)
+        order = np.argsort(~rf1, kind="stable")
+        E1, rf1, pt_of = E1[order], rf1[order], pt_of[order]
+        if len(E1):
+            M1 = np.linalg.lstsq(E1.T, A_nl.T, rcond=None)[0].T      # A_nl = M1 E1
+            M1[np.abs(M1) <= 1e-14 * np.abs(M1).max()] = 0.0
+            if np.abs(M1 @ E1 - A_nl).max() > 1e-13 * scale:
                 raise ValueError("could not factor the nonlocal assumed-strain rows")
+            # parameters E = L E1 of minimal number: L the row-echelon basis of the row space of M1
+            # (e.g. the element means of the "mean" membrane tying combine sampled strains of several points)
+            L = _row_basis(M1, 1e-12 * max(np.abs(M1).max(), 1.0))
+            rf = ~np.any(L[:, ~rf1] != 0.0, axis=1)                  # parameters of rotation-free rows only
+            order = np.argsort(~rf, kind="stable")
+            L, rf = L[order], rf[order]
+            E = L @ E1
+            M = np.linalg.lstsq(E.T, A_nl.T, rcond=None)[0].T        # A_nl = M E
+            M[np.abs(M) <= 1e-14 * np.abs(M).max()] = 0.0
+            if len(L) == len(E1) or np.abs(M @ E - A_nl).max() > 1e-13 * scale:
+                L, rf, M = np.eye(len(E1)), rf1.copy(), M1           # no reduction (or an ill-conditioned one)
         else:
+            L = np.zeros((0, 0))
+            rf = np.zeros(0, bool)
             M = np.zeros((len(row_of), 0))
-        self.par_p = np.array(par_p, np.int64)
+        npar = len(L)
+        self.n_rf = int(rf.sum())
+        # rotation-free parts: S_k[x_I] = sum_J W_k[I, J] x_J, from the membrane gradients at the points
+        # (delta e_rr = x_,r . delta x_,r, delta e_ss = x_,s . delta x_,s,
+        #  2 delta e_rs = x_,r . delta x_,s + x_,s . delta x_,r)
+        self.w2 = np.zeros((max(npar, 1), 6, 6))
+        for k in range(npar):
+            for kp in np.flatnonzero(rf1):
+                lv = L[k, kp]
+                if lv == 0.0:
+                    continue
+                pp = pt_of[kp]
+                dr, ds = EVAL_DN[pp]
+                row = E1[kp, 8 * pp:8 * pp + 3]
+                self.w2[k] += lv * (row[0] * np.outer(dr, dr) + row[1] * np.outer(ds, ds)
+                                    + 0.5 * row[2] * (np.outer(dr, ds) + np.outer(ds, dr)))
+        self.has_w = np.any(self.w2[:npar] != 0.0, axis=(1, 2)).astype(np.int64)
+        # point parameters with rotations: their sampled components and weights in the parameters
+        nr1 = np.flatnonzero(~rf1)
+        self.par_p = pt_of[nr1].astype(np.int64)
         ptr, pj, pv = [0], [], []
-        for row in E:
-            (nzc,) = np.nonzero(row)
+        lptr, lk, lv = [0], [], []
+        for kp in nr1:
+            (nzc,) = np.nonzero(E1[kp])
             pj.extend(int(c) % 8 for c in nzc)
-            pv.extend(row[nzc])
+            pv.extend(E1[kp, nzc])
             ptr.append(len(pj))
+            for k in np.flatnonzero(L[:, kp]):
+                lk.append(int(k))
+                lv.append(L[k, kp])
+            lptr.append(len(lk))
         self.par_ptr = np.array(ptr, np.int64)
         self.par_j = np.array(pj, np.int64)
         self.par_v = np.array(pv, np.float64)
+        self.pl_ptr = np.array(lptr, np.int64)
+        self.pl_k = np.array(lk, np.int64)
+        self.pl_v = np.array(lv, np.float64)
+        self.npar = npar
         mg, mi, mk, mv = [], [], [], []
         for r, (gg, row) in enumerate(row_of):
             for k in np.flatnonzero(M[r]):
@@ -1743,19 +2010,22 @@ class CompressedMaps:
         self.m_i = np.array(mi, np.int64)
         self.m_k = np.array(mk, np.int64)
         self.m_v = np.array(mv, np.float64)
+        self.m_dense = np.zeros((N_GAUSS, 8, max(npar, 1)))        # M_g by nonlocal row, dense in the parameters
+        self.m_dense[mg, self.m_i, self.m_k] = self.m_v
 
     @property
     def n_parameters(self) -> int:
-        return len(self.par_p)
+        return self.npar
 
     def nonzeros(self):
-        return self.used, self.nz_g, self.nz_i, self.nz_p, self.nz_j, self.nz_v
+        return self.used, self.a_ptr, self.a_p, self.a_j, self.a_v, self.at_ptr, self.at_g, self.at_i, self.at_v
 
     def kernel_args(self):
-        return (self.used, self.nz_g, self.nz_i, self.nz_p, self.nz_j, self.nz_v,
+        return (self.used, self.a_ptr, self.a_p, self.a_j, self.a_v, self.at_ptr, self.at_g, self.at_i, self.at_v,
                 self.pt_gauss, self.loc_rows, self.n_loc, self.loc_ptr, self.loc_i, self.loc_j, self.loc_v,
-                self.par_p, self.par_ptr, self.par_j, self.par_v, self.par_rf, self.nl_rows, self.n_nl,
-                self.m_ptr, self.m_i, self.m_k, self.m_v)
+                self.par_p, self.par_ptr, self.par_j, self.par_v, self.pl_ptr, self.pl_k, self.pl_v,
+                self.w2, self.has_w, self.n_rf, self.nl_rows, self.n_nl, self.m_ptr, self.m_i, self.m_k, self.m_v,
+                self.m_dense)
 
 
 _MAP_CACHE: dict[bytes, CompressedMaps] = {}
@@ -1819,7 +2089,7 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
     f = np.empty((m, NDOF))
     K = np.empty((m, NDOF, NDOF)) if want_tangent else np.empty((1, NDOF, NDOF))
     if m:
-        _batch(x_el, frames_el, e_ref, to_cart, weights, C, *maps.kernel_args(),
+        _batch(x_el, frames_el, e_ref, to_cart, weights, C, _section_blocks(C), *maps.kernel_args(),
                bool(want_tangent), _n_chunks(m), f, K)
     return f, (K if want_tangent else None)
 
