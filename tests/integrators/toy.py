@@ -4,18 +4,32 @@ import numpy as np
 import scipy.sparse as sp
 
 
-class CubicSpring:
+class _OneDof:
+    """What the one-DoF models share: a dead load, additive update, the increment as its own conjugate."""
+
+    dof_scale = 1.0
+
+    def initial_state(self):
+        return np.zeros(1)
+
+    def external_force(self, q):
+        return np.array([self.load])
+
+    def update(self, q, dq):
+        return q + dq
+
+    def conjugate(self, q, dq):
+        return dq
+
+
+class CubicSpring(_OneDof):
     """One DoF, f_int(w) = k (w - 1.5 w^2 + 0.5 w^3): limit points at w = 1 -+ 1/sqrt 3 (snap-through)."""
 
     def __init__(self, load=0.3, k=1.0, fail_above=None):
         self.load, self.k, self.fail_above = load, k, fail_above
-        self.dof_scale = 1.0
 
     def f_int(self, w):
         return self.k * (w - 1.5 * w**2 + 0.5 * w**3)
-
-    def initial_state(self):
-        return np.zeros(1)
 
     def residual(self, q, lam):
         if self.fail_above is not None and q[0] > self.fail_above:
@@ -26,29 +40,16 @@ class CubicSpring:
         w = q[0]
         return self.residual(q, lam), sp.csc_matrix([[self.k * (1 - 3 * w + 1.5 * w * w)]])
 
-    def external_force(self, q):
-        return np.array([self.load])
 
-    def update(self, q, dq):
-        return q + dq
-
-    def conjugate(self, q, dq):
-        return dq
-
-
-class HardeningSpring:
+class HardeningSpring(_OneDof):
     """One DoF, f_int(w) = w + w^3 (stiffening: a secant extrapolation overshoots). Any evaluation above
     ``fail_above`` raises as a non-finite element would; ``failures`` counts them."""
 
     def __init__(self, load=1.0, fail_above=None):
         self.load, self.fail_above, self.failures = load, fail_above, 0
-        self.dof_scale = 1.0
 
     def f_int(self, w):
         return w + w**3
-
-    def initial_state(self):
-        return np.zeros(1)
 
     def residual(self, q, lam):
         if self.fail_above is not None and q[0] > self.fail_above:
@@ -58,13 +59,3 @@ class HardeningSpring:
 
     def residual_and_tangent(self, q, lam):
         return self.residual(q, lam), sp.csc_matrix([[1.0 + 3.0 * q[0] ** 2]])
-
-    def external_force(self, q):
-        return np.array([self.load])
-
-    def update(self, q, dq):
-        return q + dq
-
-    def conjugate(self, q, dq):
-        return dq
-
