@@ -121,6 +121,8 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
         raise ValueError(f"predictor must be 'tangent' or 'secant', got {predictor!r}")
     if grow_iterations is None:
         grow_iterations = max(4, settings.max_iterations // 2)
+    elif isinstance(grow_iterations, bool) or not isinstance(grow_iterations, int) or grow_iterations < 0:
+        raise ValueError(f"grow_iterations must be an integer >= 0 or None, got {grow_iterations!r}")
     _check_support(model)
     state = model.initial_state() if state is None else state
     solver, stats = LinearSolver(), NewtonStats()

@@ -224,3 +224,9 @@ def test_benchmark_script_classical_variant_is_the_old_solver():
     assert default["tangents"] < 0.6 * classical["tangents"]
     assert bench.output_change(classical, default) < 1e-7
     assert default["error"] == pytest.approx(classical["error"], rel=1e-6)
+
+
+@pytest.mark.parametrize("bad", [-1, 2.5, "4", True])
+def test_bad_grow_iterations_is_refused_with_its_value(bad):
+    with pytest.raises(ValueError, match="grow_iterations"):
+        load_control(CubicSpring(), [0.1], grow_iterations=bad)
