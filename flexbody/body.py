@@ -62,14 +62,16 @@ class ShellBody:
     ----------
     mesh : the six-node triangle mesh (reference configuration)
     material : section properties
-    tying : MITC6 assumed strains (True) or plain displacement-based strains (False, locks)
+    tying : MITC6 assumed strains (True, or a membrane scheme "mean"/"point"), "mitc7" (MITC6 plus a
+        condensed rotation bubble and the canonical shear tying, :mod:`flexbody.shell.bubble`: converges
+        faster in bending, costs more per element) or plain displacement-based strains (False, locks)
     frame_axis : axis projected onto the tangent planes to orient the nodal frames (default: automatic)
     kernel : "numba" (fast) or "reference" (the readable numpy element)
     """
 
     mesh: Tri6Mesh
     material: ShellMaterial
-    tying: bool = True
+    tying: bool | str = True
     frame_axis: np.ndarray | None = None
     kernel: str = "numba"
     frames0: np.ndarray = field(init=False)
@@ -82,9 +84,23 @@ class ShellBody:
             raise TypeError(f"material must be a ShellMaterial, got {type(self.material).__name__}")
         if self.kernel not in ("numba", "reference"):
             raise ValueError(f"kernel must be 'numba' or 'reference', got {self.kernel!r}")
+        if self.tying == "mitc7" and self.kernel == "numba":
+            raise ValueError("tying='mitc7' runs on kernel='reference' only in this version")
         self.frames0 = frames_from_directors(self.mesh.directors, self.frame_axis)
         self.reference = build_reference(self.mesh, self.frames0)
         self._maps = assumed_strain_maps(self.tying)
+        # MITC7: the condensed rotation bubbles of the last evaluation, the warm start of the next one
+        # (the results do not depend on it beyond the bubble tolerance, flexbody.shell.bubble)
+        self._bubbles = np.zeros((self.mesh.n_elements, 2)) if self.tying == "mitc7" else None
+
+    @property
+    def element_name(self) -> str:
+        """The element variant, for reports: "MITC6", "MITC6 (point membrane tying)", "MITC7" or "no tying"."""
+        if self.tying == "mitc7":
+            return "MITC7"
+        if not self.tying:
+            return "no tying"
+        return "MITC6" if self.tying in (True, "mean") else f"MITC6 ({self.tying} membrane tying)"
 
     def set_reference_frames(self, nodes: np.ndarray, frames: np.ndarray) -> None:
         """Override reference frames of some nodes (e.g. to align with a symmetry plane) and rebuild."""
@@ -108,6 +124,8 @@ class ShellBody:
         fr_el = state.frames[conn]
         C = self.material.section()
         ref = self.reference
+        if self.tying == "mitc7":
+            return self._bubble_element_forces(x_el, fr_el, C, want_tangent)
         if self.kernel == "numba":
             from flexbody.shell.element import internal_force_tangent_batch
             return internal_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C,
@@ -120,6 +138,26 @@ class ShellBody:
         for e in range(m):
             geom = ElementGeometry(ref.e_ref[e], ref.to_cart[e], ref.weights[e])
             fe, Ke = internal_force_tangent(x_el[e], fr_el[e], geom, C, self.tying)
+            f[e] = fe
+            if want_tangent:
+                K[e] = Ke
+        return f, K
+
+    def _bubble_element_forces(self, x_el, fr_el, C, want_tangent):
+        """MITC7 elements: the rotation bubble condensed element by element, warm-started."""
+        ref = self.reference
+        from flexbody.shell.bubble import condense
+        from flexbody.shell.geometry import ElementGeometry
+        m = len(x_el)
+        f = np.zeros((m, 36))
+        K = np.zeros((m, 36, 36)) if want_tangent else None
+        for e in range(m):
+            geom = ElementGeometry(ref.e_ref[e], ref.to_cart[e], ref.weights[e])
+            try:
+                fe, Ke, self._bubbles[e] = condense(x_el[e], fr_el[e], geom, C, self._bubbles[e])
+            except FloatingPointError:           # the bubble diverged: a non-finite residual stops Newton
+                f[e] = np.nan
+                continue
             f[e] = fe
             if want_tangent:
                 K[e] = Ke

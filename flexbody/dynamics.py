@@ -305,6 +305,8 @@ class DynamicModel:
         """Elastic energy 1/2 sum_g w_g eps^T C eps from the numba strain kernel (same as body.strain_energy)."""
         from flexbody.shell.element import element_strains_batch
         body = self.model.body
+        if body.tying == "mitc7":          # the strains need the condensed bubbles
+            return body.strain_energy(state)
         conn = body.mesh.elements
         ref = body.reference
         eps = element_strains_batch(state.x[conn], state.frames[conn], ref.e_ref, ref.to_cart, body._maps)

@@ -1037,7 +1037,7 @@ def _flexbody_dynamic_dict(scene: Scene, summary, build_time: float, cpu_time: f
     L = np.asarray(summary.energies["angular_momentum"], float)
     angular = dict(d["momentum"]["angular"], history=L.tolist())
     return {
-        "model": f"flexbody six-node SE(3) shell ({'MITC6' if scene.model.body.tying else 'no tying'}), "
+        "model": f"flexbody six-node SE(3) shell ({scene.model.body.element_name}), "
                  f"{summary.elements} triangles, Lie-group generalized-alpha ({d['policy']})",
         "dofs": d["dofs"], "elements": d["elements"], "steps": d["steps"], "time_step": d["time_step"],
         "end_time": d["end_time"], "rho_inf": d["rho_inf"], "newton_iterations": d["newton_iterations"],
@@ -1198,7 +1198,7 @@ def dynamic_table_lines(result: dict) -> list[str]:
 def _flexbody_dict(scene: Scene, summary, build_time: float, cpu_time: float) -> dict:
     d = summary.as_dict()
     return {
-        "model": f"flexbody six-node SE(3) shell ({'MITC6' if scene.model.body.tying else 'no tying'}), "
+        "model": f"flexbody six-node SE(3) shell ({scene.model.body.element_name}), "
                  f"{summary.elements} triangles",
         "dofs": d["dofs"], "elements": d["elements"], "steps": d["steps"],
         "newton_iterations": d["newton_iterations"], "converged": d["converged"], "message": d["message"],

@@ -14,21 +14,30 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexbody.shell.geometry import (EVAL_DN, EVAL_N, GAUSS_OFFSET, MEMBRANE_MAPS, N_GAUSS, SHEAR_MAPS,
-                                     ElementGeometry)
+from flexbody.shell.geometry import (EVAL_DN, EVAL_N, EVAL_POINTS, GAUSS_OFFSET, MEMBRANE_MAPS,
+                                     MITC7_SHEAR_MAPS, N_GAUSS, SHEAR_MAPS, ElementGeometry)
 from flexbody.shell.kinematics import (NDOF, covariant_strains, measures_jacobian, point_kinematics,
                                        relative_rotations, second_variation, strain_gradient, strain_hessian)
 from flexbody.shell.mitc6 import DEFAULT_SCHEME, MEMBRANE_SCHEMES, N_TYING
+from flexbody.shell.shape import bubble_derivatives, bubble_function
 
 MEMBRANE, BENDING, SHEAR = slice(0, 3), slice(3, 6), slice(6, 8)
+#: The rotation bubble N_b = 27 r s t and its derivatives at the evaluation points (MITC7).
+EVAL_NB = np.array([bubble_function(r, s) for r, s in EVAL_POINTS])
+EVAL_DNB = np.array([bubble_derivatives(r, s) for r, s in EVAL_POINTS])
+
+
+#: The ``tying`` arguments that name an element variant besides True and False.
+TYING_NAMES = (*MEMBRANE_SCHEMES, "mitc7")
 
 
 def _scheme(tying: bool | str) -> str | None:
-    """The membrane scheme of a ``tying`` argument: True -> the default, a scheme name, False -> None."""
+    """The membrane scheme of a ``tying`` argument: True or "mitc7" -> the default, a scheme name,
+    False -> None."""
     if isinstance(tying, str):
-        if tying not in MEMBRANE_SCHEMES:
-            raise ValueError(f"tying must be True, False or one of {MEMBRANE_SCHEMES}, got {tying!r}")
-        return tying
+        if tying not in TYING_NAMES:
+            raise ValueError(f"tying must be True, False or one of {TYING_NAMES}, got {tying!r}")
+        return DEFAULT_SCHEME if tying == "mitc7" else tying
     return DEFAULT_SCHEME if tying else None
 
 
@@ -36,7 +45,8 @@ def assumed_strain_maps(tying: bool | str) -> np.ndarray:
     """A (7, 8, 17, 8): covariant strains at Gauss point g = sum A[g, :, p, :] e[p] over evaluation points.
 
     tying : True (MITC6 with the default membrane scheme), a scheme of ``mitc6.MEMBRANE_SCHEMES``
-    ("mean", "point"), or False (plain displacement-based strains).
+    ("mean", "point"), "mitc7" (the default membrane scheme, MITC7 shear) or False (plain
+    displacement-based strains).
     """
     scheme = _scheme(tying)
     n_eval = N_TYING + N_GAUSS
@@ -46,32 +56,44 @@ def assumed_strain_maps(tying: bool | str) -> np.ndarray:
         A[g, BENDING, gp, BENDING] = np.eye(3)
         if scheme is not None:
             A[g, MEMBRANE, :, MEMBRANE] = MEMBRANE_MAPS[scheme][g]
-            A[g, SHEAR, :N_TYING, SHEAR] = SHEAR_MAPS[g]
+            if tying == "mitc7":
+                A[g, SHEAR, :, SHEAR] = MITC7_SHEAR_MAPS[g]
+            else:
+                A[g, SHEAR, :N_TYING, SHEAR] = SHEAR_MAPS[g]
         else:
             A[g, MEMBRANE, gp, MEMBRANE] = np.eye(3)
             A[g, SHEAR, gp, SHEAR] = np.eye(2)
     return A
 
 
-_MAPS = {s: assumed_strain_maps(s) for s in (False, *MEMBRANE_SCHEMES)}
+_MAPS = {s: assumed_strain_maps(s) for s in (False, *TYING_NAMES)}
 
 
 def _maps(tying: bool | str) -> np.ndarray:
+    if tying == "mitc7":
+        return _MAPS["mitc7"]
     scheme = _scheme(tying)
     return _MAPS[False if scheme is None else scheme]
 
 
-def element_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, tying: bool = True) -> np.ndarray:
-    """Cartesian strains [membrane eps11, eps22, 2eps12 | bending | shear] at the 7 Gauss points, (7, 8)."""
+def element_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, tying: bool | str = True,
+                    bubble: np.ndarray | None = None) -> np.ndarray:
+    """Cartesian strains [membrane eps11, eps22, 2eps12 | bending | shear] at the 7 Gauss points, (7, 8).
+
+    For tying="mitc7" pass the rotation bubble b (:func:`flexbody.shell.bubble.condensed_bubble`).
+    """
+    if tying == "mitc7" and bubble is None:
+        raise ValueError("tying='mitc7' needs the rotation bubble: pass bubble=condensed_bubble(...)")
     d_nodes = relative_rotations(frames)
-    e = np.array([covariant_strains(point_kinematics(x, frames, d_nodes, N, dN).F)
-                  for N, dN in zip(EVAL_N, EVAL_DN)]) - geom.e_ref
+    e = np.array([covariant_strains(point_kinematics(
+        x, frames, d_nodes, N, dN, None if bubble is None else (EVAL_NB[p], EVAL_DNB[p], bubble)).F)
+        for p, (N, dN) in enumerate(zip(EVAL_N, EVAL_DN))]) - geom.e_ref
     cov = np.einsum("gipj,pj->gi", _maps(tying), e)
     return np.einsum("gij,gj->gi", geom.to_cart, cov)
 
 
 def internal_force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,
-                           tying: bool = True) -> tuple[np.ndarray, np.ndarray]:
+                           tying: bool | str = True) -> tuple[np.ndarray, np.ndarray]:
     """Internal force (36,) and tangent (36, 36) in the nodal local frames, per node [u, theta].
 
     Parameters
@@ -79,27 +101,42 @@ def internal_force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeome
     x : (6, 3) nodal positions; frames : (6, 3, 3) nodal frames R_I
     geom : reference data from :func:`flexbody.shell.geometry.element_geometry`
     section : (8, 8) Cartesian section stiffness (``ShellMaterial.section()``)
-    tying : MITC6 assumed strains on (True, or a membrane scheme name, see :func:`assumed_strain_maps`)
-             or plain displacement-based strains (False)
+    tying : MITC6 assumed strains on (True, or a membrane scheme name, see :func:`assumed_strain_maps`),
+             plain displacement-based strains (False), or "mitc7": the rotation bubble, condensed
+             (:mod:`flexbody.shell.bubble`)
     """
-    A = _maps(tying)
+    if tying == "mitc7":
+        from flexbody.shell.bubble import condensed_force_tangent
+        return condensed_force_tangent(x, frames, geom, section)
+    return force_tangent(x, frames, geom, section, _maps(tying))
+
+
+def force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,
+                  A: np.ndarray, bubble: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Force and tangent for the assumed-strain maps A (:func:`assumed_strain_maps`).
+
+    bubble : None, or the rotation bubble's amplitudes b (2,) (:mod:`flexbody.shell.bubble`); the force and
+        tangent then have 38 components, the last two for b.
+    """
     d_nodes = relative_rotations(frames)
     kin, e, B = [], [], []
-    for N, dN in zip(EVAL_N, EVAL_DN):
-        k = point_kinematics(x, frames, d_nodes, N, dN)
+    for p, (N, dN) in enumerate(zip(EVAL_N, EVAL_DN)):
+        extra = None if bubble is None else (EVAL_NB[p], EVAL_DNB[p], bubble)
+        k = point_kinematics(x, frames, d_nodes, N, dN, extra)
         kin.append(k)
         e.append(covariant_strains(k.F))
         B.append(strain_gradient(k.F) @ measures_jacobian(k))   # covariant B (paper Eq. 19-21)
     e = np.array(e) - geom.e_ref
-    B = np.array(B)                                             # (17, 8, 36)
+    B = np.array(B)                                             # (17, 8, ndof)
+    ndof = B.shape[2]
 
-    force = np.zeros(NDOF)
-    K = np.zeros((NDOF, NDOF))
+    force = np.zeros(ndof)
+    K = np.zeros((ndof, ndof))
     s_points = np.zeros_like(e)                                 # covariant stress weights per point
     for g in range(N_GAUSS):
         to_cart = geom.to_cart[g] @ A[g].reshape(8, -1)          # (8, 17*8): point strains -> Cartesian
         eps = to_cart @ e.ravel()
-        B_g = to_cart @ B.reshape(-1, NDOF)
+        B_g = to_cart @ B.reshape(-1, ndof)
         sigma = section @ eps                                   # [N, M, Q] stress resultants
         w = geom.weights[g]
         force += w * B_g.T @ sigma
@@ -115,7 +152,11 @@ def internal_force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeome
 
 
 def strain_energy(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,
-                  tying: bool = True) -> float:
-    """Elastic energy of the element, 1/2 sum_g w_g eps_g^T C eps_g."""
-    eps = element_strains(x, frames, geom, tying)
+                  tying: bool | str = True) -> float:
+    """Elastic energy of the element, 1/2 sum_g w_g eps_g^T C eps_g (MITC7: at the condensed bubble)."""
+    bubble = None
+    if tying == "mitc7":
+        from flexbody.shell.bubble import condensed_bubble
+        bubble = condensed_bubble(x, frames, geom, section)
+    eps = element_strains(x, frames, geom, tying, bubble)
     return 0.5 * float(np.einsum("g,gi,ij,gj->", geom.weights, eps, section, eps))

@@ -28,6 +28,7 @@ assert np.array_equal(EVAL_POINTS[GAUSS_OFFSET:], mitc6._GAUSS_POINTS) and len(E
 MEMBRANE_MAPS = {scheme: np.array([mitc6.membrane_map(r, s, scheme) for r, s in GAUSS_POINTS])
                  for scheme in mitc6.MEMBRANE_SCHEMES}
 SHEAR_MAPS = np.array([mitc6.shear_map(r, s) for r, s in GAUSS_POINTS])        # (7, 2, 10, 2)
+MITC7_SHEAR_MAPS = np.array([mitc6.shear_map_mitc7(r, s) for r, s in GAUSS_POINTS])  # (7, 2, 17, 2)
 
 
 def tensor_to_voigt(P: np.ndarray) -> np.ndarray:

@@ -59,10 +59,22 @@ class PointKinematics:
 
 
 def point_kinematics(x: np.ndarray, frames: np.ndarray, d_nodes: np.ndarray,
-                     N: np.ndarray, dN: np.ndarray) -> PointKinematics:
-    """Strain measures f (paper Eq. 9) and the Jacobians of the interpolated quantities."""
+                     N: np.ndarray, dN: np.ndarray, bubble: tuple | None = None) -> PointKinematics:
+    """Strain measures f (paper Eq. 9) and the Jacobians of the interpolated quantities.
+
+    bubble : optional (N_b, dN_b, b) of the rotation bubble (MITC7, :mod:`flexbody.shell.bubble`): the
+        interpolated relative rotation gains N_b (b_1, b_2, 0), b an internal element unknown in the frame
+        of the reference node; the Jacobians then have 38 columns, the last two for b.
+    """
     d = N @ d_nodes
     d_a = dN @ d_nodes
+    ndof = NDOF
+    if bubble is not None:
+        nb, dnb, b = bubble
+        bvec = np.array([b[0], b[1], 0.0])
+        d = d + nb * bvec
+        d_a = d_a + np.outer(dnb, bvec)
+        ndof = NDOF + 2
     Q = so3.exp(d)
     T = so3.tangent(d)
     R = frames[0] @ Q
@@ -70,12 +82,15 @@ def point_kinematics(x: np.ndarray, frames: np.ndarray, d_nodes: np.ndarray,
     F = np.array([R.T @ x_a[0], R.T @ x_a[1], T @ d_a[0], T @ d_a[1]])
 
     # Jacobians of d_I with respect to the nodal rotations (paper Eq. 31)
-    JdI = np.zeros((6, 3, NDOF))
+    JdI = np.zeros((6, 3, ndof))
     for i in range(1, 6):
         JdI[i][:, 6 * i + 3:6 * i + 6] = so3.tangent_inv(d_nodes[i])
         JdI[i][:, 3:6] = -so3.tangent_inv(-d_nodes[i])
     Jd = np.einsum("i,ijk->jk", N, JdI)
     Jda = np.einsum("ai,ijk->ajk", dN, JdI)
+    if bubble is not None:                                     # d is linear in b
+        Jd[:2, NDOF:] += nb * np.eye(2)
+        Jda[:, :2, NDOF:] += dnb[:, None, None] * np.eye(2)
     Jth = T @ Jd
     Jth[:, 3:6] += Q.T
     return PointKinematics(N, dN, frames, d_nodes, d, d_a, Q, T, R, F, Jd, Jda, Jth, JdI)
@@ -83,7 +98,7 @@ def point_kinematics(x: np.ndarray, frames: np.ndarray, d_nodes: np.ndarray,
 
 def measures_jacobian(k: PointKinematics) -> np.ndarray:
     """G = dF/dh, shape (12, 36), rows [f_ru, f_su, f_rw, f_sw] (paper Eq. 17, 32)."""
-    G = np.zeros((12, NDOF))
+    G = np.zeros((12, k.Jd.shape[1]))
     for a in range(2):
         f_u = k.F[a]
         rows = slice(3 * a, 3 * a + 3)
@@ -102,7 +117,7 @@ def second_variation(k: PointKinematics, g: np.ndarray) -> np.ndarray:
     g = [a_r, a_s, b_r, b_s] (12,) weights the four strain measures. Rows of H are the virtual motion,
     columns the increment; H is not symmetric away from equilibrium (the tangent lives on the group).
     """
-    H = np.zeros((NDOF, NDOF))
+    H = np.zeros((k.Jd.shape[1], k.Jd.shape[1]))
     G = measures_jacobian(k)
     g_d = np.zeros(3)          # weight of Delta(delta d)
     g_da = np.zeros((2, 3))    # weight of Delta(delta d_,a)

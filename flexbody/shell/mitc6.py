@@ -156,6 +156,27 @@ def _shear_tying_system() -> tuple[np.ndarray, np.ndarray]:
 _SHEAR_A, _SHEAR_S = _shear_tying_system()
 
 
+def _shear_tying_system_mitc7() -> tuple[np.ndarray, np.ndarray]:
+    """MITC7 (Brezzi, Bathe & Fortin 1989): the six edge conditions of MITC6a, and the element means of
+    e_rt and e_st (the 7-point rule, over all N_EVAL points) instead of their centroid values: the canonical
+    degrees of freedom of the rotated Raviart-Thomas space. S selects over N_EVAL points."""
+    A, S = _shear_tying_system()
+    S = np.concatenate([S.reshape(8, N_TYING, 2), np.zeros((8, len(_GAUSS_POINTS), 2))], axis=1)
+    S[6:] = 0.0
+    w = 2.0 * _GAUSS_WEIGHTS                                   # the mean: weights summing to 1
+    for comp in (0, 1):
+        A[6 + comp] = sum(wg * _shear_rows(r, s)[comp] for (r, s), wg in zip(_GAUSS_POINTS, w))
+        S[6 + comp, N_TYING:, comp] = w
+    return A, S.reshape(8, -1)
+
+
+def shear_map_mitc7(r: float, s: float) -> np.ndarray:
+    """MITC7 assumed transverse shear [e_rt, e_st] at (r, s): M (2, N_EVAL, 2), samples at all evaluation
+    points (tying points, then Gauss points)."""
+    A, S = _shear_tying_system_mitc7()
+    return (_shear_rows(r, s) @ np.linalg.solve(A, S)).reshape(2, N_EVAL, 2)
+
+
 def shear_map(r: float, s: float) -> np.ndarray:
     """Assumed transverse shear strains [e_rt, e_st] at (r, s) from the samples.
 

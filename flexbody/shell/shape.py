@@ -23,6 +23,17 @@ def shape_derivatives(r: float, s: float) -> np.ndarray:
     return np.array([dr, ds])
 
 
+def bubble_function(r: float, s: float) -> float:
+    """The cubic bubble N_b = 27 r s t (1 at the centroid, 0 on the edges) of the MITC7 rotations."""
+    return 27.0 * r * s * (1.0 - r - s)
+
+
+def bubble_derivatives(r: float, s: float) -> np.ndarray:
+    """dN_b/dr, dN_b/ds, shape (2,)."""
+    t = 1.0 - r - s
+    return 27.0 * np.array([s * (t - r), r * (t - s)])
+
+
 def gauss_triangle_7() -> tuple[np.ndarray, np.ndarray]:
     """The 7-point rule of degree 5 on the reference triangle (weights sum to 1/2).
 
