@@ -84,8 +84,6 @@ class ShellBody:
             raise TypeError(f"material must be a ShellMaterial, got {type(self.material).__name__}")
         if self.kernel not in ("numba", "reference"):
             raise ValueError(f"kernel must be 'numba' or 'reference', got {self.kernel!r}")
-        if self.tying == "mitc7" and self.kernel == "numba":
-            raise ValueError("tying='mitc7' runs on kernel='reference' only in this version")
         self.frames0 = frames_from_directors(self.mesh.directors, self.frame_axis)
         self.reference = build_reference(self.mesh, self.frames0)
         self._maps = assumed_strain_maps(self.tying)
@@ -146,6 +144,12 @@ class ShellBody:
     def _bubble_element_forces(self, x_el, fr_el, C, want_tangent):
         """MITC7 elements: the rotation bubble condensed element by element, warm-started."""
         ref = self.reference
+        if self.kernel == "numba":
+            from flexbody.shell.element_bubble import condensed_force_tangent_batch
+            f, K, b = condensed_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C,
+                                                    self._maps, self._bubbles, want_tangent)
+            self._bubbles = b                    # a failed element keeps its start value (and returns NaN)
+            return f, (K if want_tangent else None)
         from flexbody.shell.bubble import condense
         from flexbody.shell.geometry import ElementGeometry
         m = len(x_el)
@@ -173,6 +177,11 @@ class ShellBody:
         ref = self.reference
         args = (self.mesh.nodes[conn].astype(float), self.frames0[conn], ref.e_ref[:1], ref.to_cart[:1],
                 ref.weights[:1], self.material.section(), self._maps)
+        if self.tying == "mitc7":
+            from flexbody.shell.element_bubble import condensed_force_tangent_batch
+            condensed_force_tangent_batch(*args, np.zeros((1, 2)), True)
+            condensed_force_tangent_batch(*args, np.zeros((1, 2)), False)
+            return
         internal_force_tangent_batch(*args, True)
         internal_force_tangent_batch(*args, False)
 

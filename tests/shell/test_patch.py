@@ -3,7 +3,7 @@
 The boundary nodes get the exact values of a constant-strain field, the interior nodes are solved for with
 the element stiffness assembled at the reference state; they must reproduce the field to round-off.
 Membrane: u = B x (constant membrane strain). Bending: w = (a x^2 + 2 b x y + c y^2) / 2 with the rotations
-of zero transverse shear (constant curvature). Both with MITC6 tying and without.
+of zero transverse shear (constant curvature). With MITC6 tying, MITC7 (the condensed rotation bubble) and without tying.
 """
 
 import numpy as np
@@ -58,7 +58,7 @@ def solve_patch(mesh: Tri6Mesh, exact: np.ndarray, tying: bool) -> np.ndarray:
     return u.reshape(-1, 5)
 
 
-@pytest.mark.parametrize("tying", [True, False])
+@pytest.mark.parametrize("tying", [True, False, "mitc7"])
 def test_membrane_patch(tying):
     mesh = distorted_patch()
     B = np.array([[1.0e-3, 4.0e-4], [-2.0e-4, 6.0e-4]])
@@ -68,7 +68,7 @@ def test_membrane_patch(tying):
     assert np.abs(u - exact).max() < 1e-10 * np.abs(exact).max()
 
 
-@pytest.mark.parametrize("tying", [True, False])
+@pytest.mark.parametrize("tying", [True, False, "mitc7"])
 def test_bending_patch(tying):
     mesh = distorted_patch()
     a, b, c = 2.0e-3, -7.0e-4, 1.2e-3
