@@ -33,12 +33,10 @@ def test_cantilever_end_moment_rolls_into_a_full_circle(thickness):
 
 
 @pytest.mark.slow
-def test_slit_annular_plate_within_one_percent():
-    """W_A, W_B within 1 % at every tabulated load on 2 x 10 x 60 (measured 0.41 %).
-
-    The paper's 2 x 10 x 30 mesh gives 1.15 % at P_max here (too stiff): see docs/benchmarks.md.
-    """
-    s = run("slit_annular_plate", n_circ=60)
+def test_slit_annular_plate_within_one_percent_at_the_paper_mesh_with_mitc7():
+    """W_A, W_B within 1 % at every tabulated load on the paper's 2 x 10 x 30 mesh with MITC7 (measured
+    0.87 %). MITC6 gives 1.15 % there and 0.41 % on 2 x 10 x 60: see docs/benchmarks.md."""
+    s = run("slit_annular_plate", tying="mitc7")
     assert s.max_rel_error < 0.01
 
 
@@ -51,5 +49,13 @@ def test_hemisphere_within_one_percent():
 @pytest.mark.slow
 def test_pullout_cylinder_within_two_percent_at_pmax():
     s = run("pullout_cylinder")
+    final = [e for e in s.errors if e["load_factor"] == 1.0]
+    assert final and max(e["rel_error"] for e in final) < 0.02
+
+
+@pytest.mark.slow
+def test_pullout_cylinder_with_mitc7_within_two_percent_at_pmax():
+    """MITC7 through the snap on the paper's 2 x 12 x 8 mesh (measured 1.66 % at worst over the path)."""
+    s = run("pullout_cylinder", tying="mitc7")
     final = [e for e in s.errors if e["load_factor"] == 1.0]
     assert final and max(e["rel_error"] for e in final) < 0.02

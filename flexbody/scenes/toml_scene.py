@@ -41,6 +41,7 @@ import numpy as np
 
 from flexbody.scenes.scene import (AngularVelocity, DynamicAnalysis, Output, RadialDisplacement, Reference, Scene,
                                    StaticAnalysis)
+from flexbody.shell.element_reference import TYING_NAMES
 
 
 class SceneError(ValueError):
@@ -660,7 +661,10 @@ def scene_from_document(doc: dict, path: str | Path) -> Scene:
                      mt.number("thickness"), mt.number("density", 0.0), mt.number("shear_correction", 5.0 / 6.0))
     mt.done(_MATERIAL_KEYS)
     et = top.table("element", {})
-    tying, kernel = et.boolean("tying", True), et.string("kernel", "numba", choices=("numba", "reference"))
+    tying = et.raw("tying", True)
+    if not isinstance(tying, bool):
+        tying = et.string("tying", True, choices=TYING_NAMES)
+    kernel = et.string("kernel", "numba", choices=("numba", "reference"))
     et.done(_ELEMENT_KEYS)
     body = _wrap(where, "element", ShellBody, mesh, material, tying=tying, kernel=kernel)
     constraints = _build_bcs(top.tables("bc"), mesh)

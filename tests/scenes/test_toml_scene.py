@@ -146,6 +146,8 @@ def test_reference_csv_is_read_relative_to_the_scene_file(tmp_path):
      "Newton policy must be 'full' or 'modified', got 'lazy'"),
     (("point = [0.0, 0.5, 0.0]", "point = [0.0, 0.7, 0.0]"), "bc.1.plane selects no nodes"),
     (("steps = 2", "steps = 2\n[reference]\nfile = \"missing.csv\""), "reference.file: reference CSV"),
+    (("[[bc]]", "[element]\ntying = \"mitc9\"\n[[bc]]"),
+     "element.tying must be one of 'mean', 'point', 'mitc7', got 'mitc9'"),
 ])
 def test_mistakes_are_one_line_naming_the_key(tmp_path, edit, message):
     old, new = edit
@@ -184,3 +186,10 @@ def test_arc_length_example_matches_the_builtin_model():
     np.testing.assert_allclose(toml.model.dead, builtin.model.dead)
     assert [o.node for o in toml.outputs] == [o.node for o in builtin.outputs]
     assert set(toml.reference.values) == {"W_A", "minus_U_B", "minus_U_C"}  # columns named like the outputs
+
+
+@pytest.mark.parametrize("tying", ["mitc7", "point", False])
+def test_element_variant_by_name(tmp_path, tying):
+    value = "false" if tying is False else f'"{tying}"'
+    scene = load_toml_scene(write(tmp_path, PLATE.replace("[[bc]]", f"[element]\ntying = {value}\n[[bc]]", 1)))
+    assert scene.model.body.tying == tying
