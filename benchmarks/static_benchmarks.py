@@ -1,9 +1,10 @@
 """The paper's static benchmarks at the paper's meshes and one finer mesh: error against run time.
 
-    python benchmarks/static_benchmarks.py [--out docs/benchmarks.md] [SCENE ...]
+    python benchmarks/static_benchmarks.py [--out FILE] [--tying mitc7] [SCENE ...]
 
 Writes a Markdown table (mesh, DoFs, steps, Newton iterations, tangent updates, factorizations, wall time,
-max relative error against the reference) and prints it.
+max relative error against the reference) and prints it. ``--tying`` runs every study with that element
+variant (``mitc7``, ``point``; default: the MITC6 default).
 """
 
 from __future__ import annotations
@@ -34,11 +35,15 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("scenes", nargs="*", default=list(STUDIES))
     parser.add_argument("--out", default=None)
+    parser.add_argument("--tying", default=None, choices=("mitc7", "point", "mean"),
+                        help="element variant for every study (default: MITC6)")
     args = parser.parse_args()
     rows = ["| scene | mesh | DoFs | steps | Newton it. | tangents | factorizations | wall time [s] | max rel. error | converged |",
             "|---|---|---|---|---|---|---|---|---|---|"]
     for name in args.scenes:
         for params in STUDIES[name]:
+            if args.tying is not None:
+                params = {**params, "tying": args.tying}
             t0 = time.perf_counter()
             s = run_scene(build(name, **params))
             d = s.as_dict()
