@@ -186,14 +186,23 @@ class ShellBody:
         internal_force_tangent_batch(*args, False)
 
     def strain_energy(self, state: ShellState) -> float:
-        from flexbody.shell.element_reference import strain_energy
+        """Elastic energy of the body (numpy reference element; MITC7 at the condensed bubbles)."""
+        from flexbody.shell.element_reference import element_strains, strain_energy
         from flexbody.shell.geometry import ElementGeometry
         C = self.material.section()
         ref = self.reference
+        conn = self.mesh.elements
+        if self.tying == "mitc7":
+            # the bubbles in equilibrium with this state: the (cheap, warm-started) force-only evaluation
+            self.element_forces(state, want_tangent=False)
+            eps = np.array([element_strains(state.x[c], state.frames[c],
+                                            ElementGeometry(ref.e_ref[e], ref.to_cart[e], ref.weights[e]),
+                                            "mitc7", self._bubbles[e]) for e, c in enumerate(conn)])
+            return 0.5 * float(np.einsum("eg,egi,ij,egj->", ref.weights, eps, C, eps))
         total = 0.0
-        for e, conn in enumerate(self.mesh.elements):
+        for e, c in enumerate(conn):
             geom = ElementGeometry(ref.e_ref[e], ref.to_cart[e], ref.weights[e])
-            total += strain_energy(state.x[conn], state.frames[conn], geom, C, self.tying)
+            total += strain_energy(state.x[c], state.frames[c], geom, C, self.tying)
         return total
 
 

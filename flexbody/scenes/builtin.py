@@ -329,7 +329,7 @@ def cantilever_gravity_release(x: np.ndarray | float, t: np.ndarray, length: flo
 
 def swinging_strip(nx: int = 16, ny: int = 1, thickness: float = 0.01, young: float = 2.1e11, dt: float = 1.2e-3,
                    end_time: float = 0.12, rho_inf: float = 0.9, policy: str = "modified", output_every: int = 1,
-                   max_cutbacks: int = 4) -> Scene:
+                   max_cutbacks: int = 4, tying: bool | str = True) -> Scene:
     """Steel strip (1 x 0.1 x 0.01 m) clamped at one end, released under gravity vs the beam's modal solution.
 
     Starts straight and at rest; gravity (-9.81 m/s^2 along z, the strip's normal) sets it swinging about its
@@ -342,7 +342,7 @@ def swinging_strip(nx: int = 16, ny: int = 1, thickness: float = 0.01, young: fl
     from integrators.generalized_alpha import AlphaSettings
     L, b, rho, g = 1.0, 0.1, 7850.0, 9.81
     mesh = generators.strip(L, b, nx, ny)
-    model = Model(ShellBody(mesh, ShellMaterial(young, 0.0, thickness, density=rho)),
+    model = Model(ShellBody(mesh, ShellMaterial(young, 0.0, thickness, density=rho), tying=tying),
                   [Fix(mesh.node_set("clamped"), "all")])
     tip = mesh.nearest_node([L, b / 2, 0.0])
     analysis = DynamicAnalysis(dt, end_time, rho_inf, policy, output_every, gravity=(0.0, 0.0, -g),
@@ -357,7 +357,7 @@ def swinging_strip(nx: int = 16, ny: int = 1, thickness: float = 0.01, young: fl
     return Scene("swinging_strip", "steel strip clamped at one end, released under gravity vs the beam modes",
                  model, analysis, outs, ref,
                  dict(nx=nx, ny=ny, thickness=thickness, young=young, dt=dt, end_time=end_time, rho_inf=rho_inf,
-                      policy=policy, output_every=output_every, max_cutbacks=max_cutbacks))
+                      policy=policy, output_every=output_every, max_cutbacks=max_cutbacks, tying=tying))
 
 
 def settle_spin(dyn, omega, settle_time: float, h: float = 5e-3):
