@@ -110,3 +110,18 @@ def test_unconverged_bubble_gives_nan_force_and_keeps_the_start(element, monkeyp
     f, K, b = run(x, fr, geo, C, start)
     assert np.all(np.isnan(f[0])) and np.all(np.isnan(K[0])) and np.array_equal(b[0], start[0])
     assert np.all(np.isfinite(f[1:])) and np.all(np.isfinite(K[1:]))  # converged b: one evaluation suffices
+
+
+def test_non_symmetric_section_agrees(element):
+    """The material stiffness is formed as an upper triangle only for a symmetric section; a non-symmetric
+    one takes the general path, still equal to the reference."""
+    X, frames, geom, C = element
+    A = np.random.default_rng(5).normal(size=C.shape) * (C != 0)
+    C2 = C + 0.01 * (A - A.T) * np.abs(C)
+    assert not np.array_equal(C2, C2.T)
+    xe, fe = deformed(X, frames, np.random.default_rng(1), amplitude=0.05, rot=0.3)
+    f_ref, K_ref = condensed_force_tangent(xe, fe, geom, C2)
+    f, K, _ = condensed_force_tangent_batch(xe[None], fe[None], geom.e_ref[None], geom.to_cart[None],
+                                            geom.weights[None], C2, A7, None)
+    assert rel(f[0], f_ref) < TOL
+    assert rel(K[0], K_ref) < TOL
