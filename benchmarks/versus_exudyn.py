@@ -1,6 +1,6 @@
 """Work against precision, flexbody and exudyn's ANCF thin plate on the same problems, in one run.
 
-    python benchmarks/versus_exudyn.py [SCENE ...] [--quick] [--json FILE]
+    python benchmarks/versus_exudyn.py [SCENE ...] [--quick] [--json FILE] [--also-tying mitc7]
 
 For each of the paper's shell benchmarks (slit annular plate, pulled cylinder, hemisphere) both codes run a
 ladder of meshes. Every run reports its CPU time (process time of the solve, no model building, no numba
@@ -10,7 +10,8 @@ compilation) and its maximum relative error against the reference table over the
 The ratio answers issue 5's question "how much less time for the same or better accuracy": for every
 exudyn run, the cheapest flexbody run of the ladder whose error is at most exudyn's, and the ratio of the
 two CPU times (> 1: flexbody is faster). Where no flexbody run of the ladder is as accurate, the ratio is
-not given.
+not given. ``--also-tying mitc7`` runs the flexbody ladder a second time with that element variant; both
+variants then compete for the cheapest run at exudyn's accuracy.
 
 CPU time, not wall time: the machine has two cores and benchmarks share it with other work; both codes
 run single-threaded here (exudyn's EigenSparse LU, scipy's SuperLU; the element kernel's second thread is
@@ -51,7 +52,10 @@ def run_flexbody(scene_name: str, params: dict) -> dict:
     summary = run_scene(scene)
     cpu = time.process_time() - c0
     d = summary.as_dict()
-    return dict(code="flexbody", mesh="2x" + "x".join(str(v) for v in params.values()), dofs=d["dofs"],
+    mesh = "2x" + "x".join(str(v) for k, v in params.items() if k != "tying")
+    if "tying" in params:
+        mesh += f" {scene.model.body.element_name}"
+    return dict(code="flexbody", mesh=mesh, dofs=d["dofs"],
                 steps=d["steps"], iterations=d["newton_iterations"], factorizations=d["factorizations"],
                 cpu_s=cpu, wall_s=d["wall_time_s"], error=d["max_rel_error"], converged=d["converged"])
 
@@ -91,6 +95,8 @@ def main() -> None:
     parser.add_argument("scenes", nargs="*", default=None)
     parser.add_argument("--quick", action="store_true", help="one coarse run per code (smoke test)")
     parser.add_argument("--json", default=None, help="write all runs and ratios as JSON")
+    parser.add_argument("--also-tying", default=None, choices=("mitc7", "point"),
+                        help="also run the flexbody ladder with this element variant")
     args = parser.parse_args()
     ladders = QUICK if args.quick else LADDERS
     names = args.scenes or list(ladders)
@@ -100,6 +106,8 @@ def main() -> None:
     out = {}
     for name in names:
         runs_f = [run_flexbody(name, p) for p in ladders[name]["flexbody"]]
+        if args.also_tying:
+            runs_f += [run_flexbody(name, {**p, "tying": args.also_tying}) for p in ladders[name]["flexbody"]]
         runs_x = [run_exudyn(name, nx, ny) for nx, ny in ladders[name]["exudyn"]]
         print(f"\n## {name}\n")
         print("| code | mesh | DoFs | steps | Newton it. | factorizations | CPU [s] | wall [s] | max rel. error |")
