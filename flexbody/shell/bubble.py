@@ -93,9 +93,10 @@ def _newton(x, frames, geom, section, b):
                                   K[NDOF + 1, NDOF + 1]))
         if not np.all(np.isfinite(db)):
             break
-        if np.abs(db).max() <= BUBBLE_TOL * (1.0 + np.abs(b).max()):
-            return b, f, K                                  # r_b(b) = 0 to round-off
         b = b + db
+        if np.abs(db).max() <= BUBBLE_TOL * (1.0 + np.abs(b).max()):
+            f, K = _augmented(x, frames, geom, section, b)  # at the final b: r_b's error ~ |db|^2, round-off
+            return b, f, K
     raise FloatingPointError(f"the rotation bubble did not converge (last correction {np.abs(db).max():.3e})")
 
 
