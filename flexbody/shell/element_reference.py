@@ -16,7 +16,7 @@ import numpy as np
 
 from flexbody.shell.geometry import (EVAL_DN, EVAL_N, EVAL_POINTS, GAUSS_OFFSET, MEMBRANE_MAPS,
                                      MITC7_SHEAR_MAPS, N_GAUSS, SHEAR_MAPS, ElementGeometry)
-from flexbody.shell.kinematics import (NDOF, covariant_strains, measures_jacobian, point_kinematics,
+from flexbody.shell.kinematics import (covariant_strains, measures_jacobian, point_kinematics,
                                        relative_rotations, second_variation, strain_gradient, strain_hessian)
 from flexbody.shell.mitc6 import DEFAULT_SCHEME, MEMBRANE_SCHEMES, N_TYING
 from flexbody.shell.shape import bubble_derivatives, bubble_function
