@@ -260,7 +260,7 @@ class Model:
         self._check_finite(state)
         if not np.isfinite(lam):
             raise FloatingPointError(f"non-finite load factor {lam!r}")
-        fe, Ke = self.body.element_forces(state, want_tangent)
+        fe, Ke = self.body.element_forces(state, want_tangent, state.stress if want_tangent else None)
         self.counters.residuals += 1
         bad = np.flatnonzero(~np.all(np.isfinite(fe), axis=1))
         if bad.size == 0 and want_tangent:
@@ -326,7 +326,11 @@ class Model:
         return d6.ravel()[self.free]
 
     def update(self, state: ShellState, dq: np.ndarray) -> ShellState:
-        """q <- q o exp(dq): the 5-DoF nodal update."""
+        """q <- q o exp(dq): the 5-DoF nodal update.
+
+        In the mixed Newton iteration (``state.stress`` set) the Gauss-point stresses move on with the
+        linearized strains of the old state, sigma <- C (eps(q) + B(q) dq) (:meth:`ShellBody.stresses`).
+        """
         n = self.body.n_nodes
         d6 = np.zeros(6 * n)
         d6[self.free] = dq
@@ -334,7 +338,21 @@ class Model:
         du = d6[:, :3].copy()
         idx = np.flatnonzero(self.has_basis)
         du[idx] = np.einsum("nij,nj->ni", self.basis[idx], d6[idx, :3])
-        return update_state(state, du, d6[:, 3:5], self.has_basis)
+        new = update_state(state, du, d6[:, 3:5], self.has_basis)
+        if state.stress is not None:
+            # the local nodal motion [du, dtheta] of each element (du local: R_I^T dx_I on basis nodes)
+            h = np.zeros((n, 6))
+            h[:, :3] = du
+            h[idx, :3] = np.einsum("nji,nj->ni", state.frames[idx], du[idx])
+            h[:, 3:5] = d6[:, 3:5]
+            new.stress = self.body.stresses(state, h[self.body.mesh.elements].reshape(-1, 36))
+        return new
+
+    def with_stresses(self, state: ShellState) -> ShellState:
+        """The state with the Gauss-point stresses of its strains: the start of a mixed Newton iteration."""
+        new = state.copy()
+        new.stress = self.body.stresses(state)
+        return new
 
     @staticmethod
     def _check_finite(state: ShellState) -> None:

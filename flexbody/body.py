@@ -25,9 +25,12 @@ class ShellState:
 
     x: np.ndarray
     frames: np.ndarray
+    #: Stress resultants (m, 7, 8) at the Gauss points iterated as unknowns of their own by the mixed Newton
+    #: iteration (:meth:`ShellBody.stresses`); None outside it. Only the iteration matrix reads them.
+    stress: np.ndarray | None = None
 
     def copy(self) -> "ShellState":
-        return ShellState(self.x.copy(), self.frames.copy())
+        return ShellState(self.x.copy(), self.frames.copy(), None if self.stress is None else self.stress.copy())
 
     @property
     def directors(self) -> np.ndarray:
@@ -115,31 +118,71 @@ class ShellBody:
         return self.mesh.n_nodes
 
     # -- element evaluation -------------------------------------------------------------------------------
-    def element_forces(self, state: ShellState, want_tangent: bool = True):
-        """Element internal forces (m, 36) and tangents (m, 36, 36) in the nodal local frames."""
+    @property
+    def supports_mixed_iteration(self) -> bool:
+        """Whether the mixed Newton iteration (independent Gauss-point stresses) is available: the MITC6
+        variants; MITC7 condenses its bubble against the strains' own stresses."""
+        return self.tying != "mitc7"
+
+    def element_forces(self, state: ShellState, want_tangent: bool = True, stress: np.ndarray | None = None):
+        """Element internal forces (m, 36) and tangents (m, 36, 36) in the nodal local frames.
+
+        stress : optional (m, 7, 8) Gauss-point stress resultants for the geometric terms of the tangent
+            (the mixed Newton iteration; :func:`flexbody.shell.element_reference.force_tangent`).
+        """
         conn = self.mesh.elements
         x_el = state.x[conn]
         fr_el = state.frames[conn]
         C = self.material.section()
         ref = self.reference
         if self.tying == "mitc7":
+            if stress is not None:
+                raise ValueError("the mixed Newton iteration is not available for tying='mitc7'")
             return self._bubble_element_forces(x_el, fr_el, C, want_tangent)
         if self.kernel == "numba":
             from flexbody.shell.element import internal_force_tangent_batch
             return internal_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C,
-                                                self._maps, want_tangent)
-        from flexbody.shell.element_reference import internal_force_tangent
-        from flexbody.shell.geometry import ElementGeometry
+                                                self._maps, want_tangent, stress)
+        from flexbody.shell.element_reference import force_tangent
         m = len(conn)
         f = np.zeros((m, 36))
         K = np.zeros((m, 36, 36)) if want_tangent else None
         for e in range(m):
-            geom = ElementGeometry(ref.e_ref[e], ref.to_cart[e], ref.weights[e])
-            fe, Ke = internal_force_tangent(x_el[e], fr_el[e], geom, C, self.tying)
+            fe, Ke = force_tangent(x_el[e], fr_el[e], self._geometry(e), C, self._maps,
+                                   stress=None if stress is None else stress[e])
             f[e] = fe
             if want_tangent:
                 K[e] = Ke
         return f, K
+
+    def _geometry(self, e: int):
+        from flexbody.shell.geometry import ElementGeometry
+        ref = self.reference
+        return ElementGeometry(ref.e_ref[e], ref.to_cart[e], ref.weights[e])
+
+    def stresses(self, state: ShellState, dh_el: np.ndarray | None = None) -> np.ndarray:
+        """Stress resultants C (eps_g + B_g dh) (m, 7, 8) at the Gauss points: of the state (dh_el None), or
+        linearized along local nodal motions dh_el (m, 36), per node [du, dtheta] -- the stress update of
+        the mixed Newton iteration (MITC6 variants)."""
+        if not self.supports_mixed_iteration:
+            raise ValueError("linearized stresses are not available for tying='mitc7'")
+        conn = self.mesh.elements
+        m = len(conn)
+        dh_el = np.zeros((m, 36)) if dh_el is None else np.asarray(dh_el, dtype=float)
+        if dh_el.shape != (m, 36):
+            raise ValueError(f"dh_el must have shape ({m}, 36), got {dh_el.shape}")
+        ref = self.reference
+        if self.kernel == "numba":
+            from flexbody.shell.element import linearized_strains_batch
+            eps, deps = linearized_strains_batch(state.x[conn], state.frames[conn], ref.e_ref, ref.to_cart,
+                                                 self._maps, dh_el)
+        else:
+            from flexbody.shell.element_reference import linearized_strains
+            pairs = [linearized_strains(state.x[c], state.frames[c], self._geometry(e), dh_el[e], self.tying)
+                     for e, c in enumerate(conn)]
+            eps = np.array([p[0] for p in pairs]).reshape(m, N_GAUSS, 8)
+            deps = np.array([p[1] for p in pairs]).reshape(m, N_GAUSS, 8)
+        return (eps + deps) @ self.material.section().T
 
     def _bubble_element_forces(self, x_el, fr_el, C, want_tangent):
         """MITC7 elements: the rotation bubble condensed element by element, warm-started."""
@@ -151,14 +194,12 @@ class ShellBody:
             self._bubbles = b                    # a failed element keeps its start value (and returns NaN)
             return f, (K if want_tangent else None)
         from flexbody.shell.bubble import condense
-        from flexbody.shell.geometry import ElementGeometry
         m = len(x_el)
         f = np.zeros((m, 36))
         K = np.zeros((m, 36, 36)) if want_tangent else None
         for e in range(m):
-            geom = ElementGeometry(ref.e_ref[e], ref.to_cart[e], ref.weights[e])
             try:
-                fe, Ke, self._bubbles[e] = condense(x_el[e], fr_el[e], geom, C, self._bubbles[e])
+                fe, Ke, self._bubbles[e] = condense(x_el[e], fr_el[e], self._geometry(e), C, self._bubbles[e])
             except FloatingPointError:           # the bubble diverged: a non-finite residual stops Newton
                 f[e] = np.nan
                 continue
@@ -184,25 +225,24 @@ class ShellBody:
             return
         internal_force_tangent_batch(*args, True)
         internal_force_tangent_batch(*args, False)
+        from flexbody.shell.element import linearized_strains_batch
+        linearized_strains_batch(*args[:4], self._maps, np.zeros((1, 36)))
 
     def strain_energy(self, state: ShellState) -> float:
         """Elastic energy of the body (numpy reference element; MITC7 at the condensed bubbles)."""
         from flexbody.shell.element_reference import element_strains, strain_energy
-        from flexbody.shell.geometry import ElementGeometry
         C = self.material.section()
         ref = self.reference
         conn = self.mesh.elements
         if self.tying == "mitc7":
             # the bubbles in equilibrium with this state: the (cheap, warm-started) force-only evaluation
             self.element_forces(state, want_tangent=False)
-            eps = np.array([element_strains(state.x[c], state.frames[c],
-                                            ElementGeometry(ref.e_ref[e], ref.to_cart[e], ref.weights[e]),
-                                            "mitc7", self._bubbles[e]) for e, c in enumerate(conn)])
+            eps = np.array([element_strains(state.x[c], state.frames[c], self._geometry(e), "mitc7",
+                                            self._bubbles[e]) for e, c in enumerate(conn)])
             return 0.5 * float(np.einsum("eg,egi,ij,egj->", ref.weights, eps, C, eps))
         total = 0.0
         for e, c in enumerate(conn):
-            geom = ElementGeometry(ref.e_ref[e], ref.to_cart[e], ref.weights[e])
-            total += strain_energy(state.x[c], state.frames[c], geom, C, self.tying)
+            total += strain_energy(state.x[c], state.frames[c], self._geometry(e), C, self.tying)
         return total
 
 

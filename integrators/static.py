@@ -82,6 +82,13 @@ def _failure_message(f: FailureReport) -> str:
             f"converged load factor {f.load_factor:.6g} (state kept)")
 
 
+def _with_stresses(model, state, settings: NewtonSettings):
+    """The start of a step: under the mixed iteration, the state with the stresses of its strains."""
+    if settings.mixed and model.body.supports_mixed_iteration:
+        return model.with_stresses(state)
+    return state
+
+
 def load_control(model, load_factors=None, *, n_steps: int = 10, settings: NewtonSettings | None = None,
                  min_step: float = 1e-4, max_step: float | None = None, adaptive: bool = True,
                  on_step: Callable | None = None, state=None, predictor: str = "tangent",
@@ -144,13 +151,13 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
                 reference = _reference_norm(model, state, trial)
             except FloatingPointError as exc:
                 reference, early = np.nan, str(exc)
-            start, shift = state, None
+            start, shift = _with_stresses(model, state, settings), None
             if np.isfinite(reference) and use_predictor and prev_increment is not None:
                 shift = min((trial - lam) / prev_dlam, MAX_EXTRAPOLATION) * prev_increment
                 try:
-                    start = model.update(state, shift)
+                    start = model.update(start, shift)
                 except FloatingPointError:
-                    start, shift = state, None
+                    start, shift = _with_stresses(model, state, settings), None
             if not np.isfinite(reference):
                 out = None
             else:
@@ -283,7 +290,7 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
             dl *= max_load_increment / abs(dlam)
             dlam = sign * max_load_increment
         Dq = dlam * dq_f
-        trial = model.update(state, Dq)
+        trial = model.update(_with_stresses(model, state, settings), Dq)
         trial_lam = lam + dlam
         held_lag = float("inf")
         ok, residuals, it, reason, non_finite, lazy = False, [], 0, "", False, False

@@ -598,6 +598,12 @@ def _stress_weights(e, used, to_cart, weights, C, Ch, use_ch, a_ptr, a_p, a_j, a
             for r in range(8):
                 acc += to_cart[e, gg, r, c] * v16[8 + r]
             st[gg, c] = acc
+    _pull_back(used, at_ptr, at_g, at_i, at_v, st, Ps)
+
+
+@inl
+def _pull_back(used, at_ptr, at_g, at_i, at_v, st, Ps):
+    """Ps[p, j] = sum_g,i A[g, i, p, j] st[g, i] at the used points (A by columns: at_ptr over p * 8 + j)."""
     for k in range(used.shape[0]):
         p = used[k]
         for j in range(8):
@@ -606,6 +612,20 @@ def _stress_weights(e, used, to_cart, weights, C, Ch, use_ch, a_ptr, a_p, a_j, a
             for q in range(at_ptr[c], at_ptr[c + 1]):
                 acc += at_v[q] * st[at_g[q], at_i[q]]
             Ps[p, j] = acc
+
+
+@jit
+def _given_stress_weights(e, used, to_cart, weights, stress, at_ptr, at_g, at_i, at_v, st, Ps):
+    """Ps[p] = sum_g w_g (T_g A_g)^T stress[e, g] at the used points: the covariant weights of given
+    Cartesian stress resultants (the independent stresses of the mixed Newton iteration)."""
+    for gg in range(N_GAUSS):
+        w = weights[e, gg]
+        for c in range(8):
+            acc = 0.0
+            for r in range(8):
+                acc += to_cart[e, gg, r, c] * stress[e, gg, r]
+            st[gg, c] = w * acc
+    _pull_back(used, at_ptr, at_g, at_i, at_v, st, Ps)
 
 
 @inl
@@ -1526,8 +1546,10 @@ def _cross_terms(loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v, nl_rows, n_nl, m
 
 
 @jit
-def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, T0, K, Dp, Dm):
+def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fe, fz, dn, ninv, K1, T0, K, Dp, Dm):
     """K[e] = P^T Kz P + (D P^T[.]) fz (Kz on the accumulation pattern: mirror the symmetric part first).
+
+    f[fe] and fz are the element force (local, and in z) whose stresses the geometric terms carry.
 
     Kiso (6 x 6) is the scalar translation-translation part accumulated separately (times I_3).
     """
@@ -1623,9 +1645,9 @@ def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, T0, K, Dp, Dm):
             K[e, 3 + r, k] = T0[r, k]
     # node terms: hat(f_u,I) in (u_I, theta_I) and the D T^-1 terms of Delta(delta d_I)
     for i in range(6):
-        u0 = f[e, 6 * i]
-        u1 = f[e, 6 * i + 1]
-        u2 = f[e, 6 * i + 2]
+        u0 = f[fe, 6 * i]
+        u1 = f[fe, 6 * i + 1]
+        u2 = f[fe, 6 * i + 2]
         r = 6 * i
         c = 6 * i + 3
         K[e, r, c + 1] -= u2
@@ -1673,12 +1695,16 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
            pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
            par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
            nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
-           want_tangent, f, K,
+           want_tangent, use_stress, stress, f, K,
            x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps,
-           F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz,
+           F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz, fg,
            cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
            t0, t1, t2, t3, t4, t5):
-    """Internal forces f[e] (and tangents K[e]) of the elements e0 <= e < e1."""
+    """Internal forces f[e] (and tangents K[e]) of the elements e0 <= e < e1.
+
+    With use_stress the geometric terms of the tangent carry the given stress resultants stress[e] instead
+    of those of the strains (the mixed Newton iteration); the force is always that of the strains.
+    """
     for e in range(e0, e1):
         if e + _AHEAD < e1:
             _prefetch_element(e + _AHEAD, x_el, fr_el, e_ref, to_cart, weights, want_tangent, K)
@@ -1696,6 +1722,12 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
         _force_to_local(e, fz, fr, Ti, f)
         if not want_tangent:
             continue
+        fv, fe = f, e
+        if use_stress:
+            _given_stress_weights(e, used, to_cart, weights, stress, at_ptr, at_g, at_i, at_v, st, Ps)
+            _force_points(used, PF, PQ, PT, PR, PX, Ps, g, G2, phi, fz)
+            _force_to_local(0, fz, fr, Ti, fg)
+            fv, fe = fg, 0
         _points_tangent(used, pt_gauss, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
                         loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
                         g, core, Y, Kz, Kiso, Dl, Bl, CBl, t0, t1, t2, t3, t4, t5)
@@ -1707,7 +1739,7 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
                 _cross_terms(loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
                              Ch, Sp, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s,
                              Dl, Bl, Wp, Y, Yt, K1, Kz)
-        _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, T0, K, t0, t1)
+        _finish_tangent(e, Kz, Kiso, fr, Ti, fv, fe, fz, dn, ninv, K1, T0, K, t0, t1)
 
 
 @numba.njit(cache=True, parallel=True)
@@ -1716,7 +1748,7 @@ def _batch(x_el, fr_el, e_ref, to_cart, weights, C, cblk,
            pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
            par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
            nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
-           want_tangent, n_chunks, f, K):
+           want_tangent, use_stress, stress, n_chunks, f, K):
     m = x_el.shape[0]
     npar = max(has_w.shape[0], 1)
     n_rows = max(4 * ((npar + 3) // 4), n_rf + 4 * ((npar - n_rf + 3) // 4))
@@ -1751,6 +1783,7 @@ def _batch(x_el, fr_el, e_ref, to_cart, weights, C, cblk,
         G2 = np.empty((1, 12))
         phi = np.empty((1, 18))
         fz = np.empty((1, NZ))
+        fg = np.empty((1, NDOF))
         cov = np.empty((N_GAUSS, 8))
         st = np.empty((N_GAUSS, 8))
         Ch = np.empty((N_GAUSS, 8, 8))
@@ -1781,9 +1814,9 @@ def _batch(x_el, fr_el, e_ref, to_cart, weights, C, cblk,
                pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
                par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
                nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
-               want_tangent, f, K,
+               want_tangent, use_stress, stress, f, K,
                x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps,
-               F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz,
+               F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz, fg,
                cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
                t0, t1, t2, t3, t4, t5)
 
@@ -1824,6 +1857,125 @@ def _batch_strains(x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_p
         _chunk_strains((ch * m) // n_chunks, ((ch + 1) * m) // n_chunks, x_el, fr_el, e_ref, to_cart, used,
                        a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, out, x, fr, dn, Ti, ninv, Pd, Pda, Pco,
                        PQ, PT, PR, PF, PX, Pe, cov, t0)
+
+
+@jit
+def _strain_increments_points(e, used, fr, Ti, dh, PF, PQ, PT, PR, PX, dX, dD, dPe):
+    """dPe[p] = D(F_p) G_p dh[e]: the covariant strains at the used points linearized along the local nodal
+    motion dh[e] = [du_I, dtheta_I] (kinematics.measures_jacobian, strain_gradient):
+        delta f_au = f_au x omega + R^T sum dN_I R_I du_I,  omega = T(d) delta d + Q^T dtheta_0,
+        delta f_aw = DT(d)[delta d] d_,a + T(d) delta d_,a,  delta d_I = T^-1(d_I) dtheta_I - T^-1(-d_I) dtheta_0.
+    """
+    for i in range(6):
+        for c in range(3):
+            dX[i, c] = fr[i, c, 0] * dh[e, 6 * i] + fr[i, c, 1] * dh[e, 6 * i + 1] + fr[i, c, 2] * dh[e, 6 * i + 2]
+            dD[i, c] = 0.0
+    for i in range(1, 6):
+        for c in range(3):
+            acc = 0.0
+            for k in range(3):
+                acc += Ti[i, c, k] * dh[e, 6 * i + 3 + k] - Ti[i, k, c] * dh[e, 3 + k]
+            dD[i, c] = acc
+    for k in range(used.shape[0]):
+        p = used[k]
+        F = PF[p]
+        Q = PQ[p]
+        T = PT[p]
+        R = PR[p]
+        dd0 = 0.0
+        dd1 = 0.0
+        dd2 = 0.0
+        for i in range(1, 6):
+            dd0 += _EN[p, i] * dD[i, 0]
+            dd1 += _EN[p, i] * dD[i, 1]
+            dd2 += _EN[p, i] * dD[i, 2]
+        om0 = T[0, 0] * dd0 + T[0, 1] * dd1 + T[0, 2] * dd2 + Q[0, 0] * dh[e, 3] + Q[1, 0] * dh[e, 4] + Q[2, 0] * dh[e, 5]
+        om1 = T[1, 0] * dd0 + T[1, 1] * dd1 + T[1, 2] * dd2 + Q[0, 1] * dh[e, 3] + Q[1, 1] * dh[e, 4] + Q[2, 1] * dh[e, 5]
+        om2 = T[2, 0] * dd0 + T[2, 1] * dd1 + T[2, 2] * dd2 + Q[0, 2] * dh[e, 3] + Q[1, 2] * dh[e, 4] + Q[2, 2] * dh[e, 5]
+        for a in range(2):
+            x0 = 0.0
+            x1 = 0.0
+            x2 = 0.0
+            w0 = 0.0
+            w1 = 0.0
+            w2 = 0.0
+            for i in range(6):
+                wd = _EDN[p, a, i]
+                x0 += wd * dX[i, 0]
+                x1 += wd * dX[i, 1]
+                x2 += wd * dX[i, 2]
+                w0 += wd * dD[i, 0]
+                w1 += wd * dD[i, 1]
+                w2 += wd * dD[i, 2]
+            fu0 = F[a, 0]
+            fu1 = F[a, 1]
+            fu2 = F[a, 2]
+            # delta f_au (row a of dF), delta f_aw (row 2 + a), stored in the workspace dX rows 6 + a, 8 + a
+            dX[6 + a, 0] = fu1 * om2 - fu2 * om1 + R[0, 0] * x0 + R[1, 0] * x1 + R[2, 0] * x2
+            dX[6 + a, 1] = fu2 * om0 - fu0 * om2 + R[0, 1] * x0 + R[1, 1] * x1 + R[2, 1] * x2
+            dX[6 + a, 2] = fu0 * om1 - fu1 * om0 + R[0, 2] * x0 + R[1, 2] * x1 + R[2, 2] * x2
+            X = PX[p, a]
+            for c in range(3):
+                dX[8 + a, c] = (X[c, 0] * dd0 + X[c, 1] * dd1 + X[c, 2] * dd2
+                                + T[c, 0] * w0 + T[c, 1] * w1 + T[c, 2] * w2)
+        r = dX[6]
+        sv = dX[7]
+        rw = dX[8]
+        sw = dX[9]
+        # linearized covariant_strains (kinematics.covariant_strains): a . hat(e3) b = a1 b0 - a0 b1
+        dPe[p, 0] = F[0, 0] * r[0] + F[0, 1] * r[1] + F[0, 2] * r[2]
+        dPe[p, 1] = F[1, 0] * sv[0] + F[1, 1] * sv[1] + F[1, 2] * sv[2]
+        dPe[p, 2] = 0.5 * (r[0] * F[1, 0] + r[1] * F[1, 1] + r[2] * F[1, 2]
+                           + F[0, 0] * sv[0] + F[0, 1] * sv[1] + F[0, 2] * sv[2])
+        dPe[p, 3] = -(r[1] * F[2, 0] + F[0, 1] * rw[0] - r[0] * F[2, 1] - F[0, 0] * rw[1])
+        dPe[p, 4] = -(sv[1] * F[3, 0] + F[1, 1] * sw[0] - sv[0] * F[3, 1] - F[1, 0] * sw[1])
+        dPe[p, 5] = -0.5 * ((r[1] * F[3, 0] + F[0, 1] * sw[0] - r[0] * F[3, 1] - F[0, 0] * sw[1])
+                            + (sv[1] * F[2, 0] + F[1, 1] * rw[0] - sv[0] * F[2, 1] - F[1, 0] * rw[1]))
+        dPe[p, 6] = r[2]
+        dPe[p, 7] = sv[2]
+
+
+@jit
+def _chunk_linearized(e0, e1, x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
+                      dh, eps, deps, x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, dX, dD, cov, t0):
+    for e in range(e0, e1):
+        _load_element(e, x_el, fr_el, x, fr)
+        _node_setup(fr, dn, Ti, ninv, t0)
+        _interpolate_points(used, dn, Pd, Pda)
+        _point_coefficients(used, Pd, Pco)
+        _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, True)
+        _strains_points(e, used, e_ref, PF, Pe)
+        _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, eps)
+        _strain_increments_points(e, used, fr, Ti, dh, PF, PQ, PT, PR, PX, dX, dD, Pe)
+        _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, deps)
+
+
+@numba.njit(cache=True, parallel=True)
+def _batch_linearized(x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, dh,
+                      n_chunks, eps, deps):
+    m = x_el.shape[0]
+    for ch in prange(n_chunks):
+        x = np.empty((6, 3))
+        fr = np.empty((6, 3, 3))
+        dn = np.empty((6, 3))
+        Ti = np.empty((6, 3, 3))
+        ninv = np.empty((6, 2))
+        Pd = np.empty((N_EVAL, 3))
+        Pda = np.empty((N_EVAL, 2, 3))
+        Pco = np.empty((N_EVAL, 9))
+        PQ = np.empty((N_EVAL, 3, 3))
+        PT = np.empty((N_EVAL, 3, 3))
+        PR = np.empty((N_EVAL, 3, 3))
+        PF = np.empty((N_EVAL, 4, 3))
+        PX = np.empty((N_EVAL, 2, 3, 3))
+        Pe = np.empty((N_EVAL, 8))
+        dX = np.empty((10, 3))
+        dD = np.empty((6, 3))
+        cov = np.empty((N_GAUSS, 8))
+        t0 = np.empty((3, 3))
+        _chunk_linearized((ch * m) // n_chunks, ((ch + 1) * m) // n_chunks, x_el, fr_el, e_ref, to_cart, used,
+                          a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, dh, eps, deps, x, fr, dn, Ti, ninv,
+                          Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, dX, dD, cov, t0)
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -2059,7 +2211,7 @@ def _as(a, shape_tail, name):
 
 def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.ndarray,
                                  to_cart: np.ndarray, weights: np.ndarray, section: np.ndarray,
-                                 A: np.ndarray, want_tangent: bool = True):
+                                 A: np.ndarray, want_tangent: bool = True, stress: np.ndarray | None = None):
     """Internal forces (m, 36) and tangents (m, 36, 36) of m elements, per node [u, theta], local frames.
 
     Same result as :func:`flexbody.shell.element_reference.internal_force_tangent` element by element.
@@ -2071,6 +2223,9 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
     section : (8, 8) symmetric section stiffness
     A : (7, 8, 17, 8) assumed-strain map (element_reference.assumed_strain_maps(tying))
     want_tangent : False takes the residual-only path (no tangent, no second variation); K is then None.
+    stress : optional (m, 7, 8) Cartesian stress resultants at the Gauss points for the geometric terms of
+        the tangent (the mixed Newton iteration, :func:`flexbody.shell.element_reference.force_tangent`);
+        the force is always that of the strains. None: the stresses of the strains.
     """
     x_el = _as(x_el, (6, 3), "x_el")
     m = x_el.shape[0]
@@ -2085,12 +2240,16 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
         raise ValueError(f"section must be (8, 8), got {C.shape}")
     if not np.allclose(C, C.T, rtol=0.0, atol=1e-13 * np.abs(C).max()):
         raise ValueError("section stiffness must be symmetric")
+    use_stress = stress is not None and want_tangent
+    stress = _as(stress, (N_GAUSS, 8), "stress") if use_stress else np.zeros((1, N_GAUSS, 8))
+    if use_stress and len(stress) != m:
+        raise ValueError(f"stress must have one row per element ({m}), got {len(stress)}")
     maps = compress_maps(A)
     f = np.empty((m, NDOF))
     K = np.empty((m, NDOF, NDOF)) if want_tangent else np.empty((1, NDOF, NDOF))
     if m:
         _batch(x_el, frames_el, e_ref, to_cart, weights, C, _section_blocks(C), *maps.kernel_args(),
-               bool(want_tangent), _n_chunks(m), f, K)
+               bool(want_tangent), use_stress, stress, _n_chunks(m), f, K)
     return f, (K if want_tangent else None)
 
 
@@ -2112,3 +2271,26 @@ def element_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.nda
     if m:
         _batch_strains(x_el, frames_el, e_ref, to_cart, *maps.nonzeros(), _n_chunks(m), out)
     return out
+
+
+def linearized_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.ndarray, to_cart: np.ndarray,
+                             A: np.ndarray, dh_el: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Cartesian Gauss-point strains eps (m, 7, 8) of m elements and their linearization B dh along the local
+    nodal motions dh_el (m, 36), per node [du, dtheta] (the strain increment of the mixed Newton iteration).
+
+    Same result as :func:`flexbody.shell.element_reference.linearized_strains` element by element.
+    """
+    x_el = _as(x_el, (6, 3), "x_el")
+    m = x_el.shape[0]
+    frames_el = _as(frames_el, (6, 3, 3), "frames_el")
+    e_ref = _as(e_ref, (N_EVAL, 8), "e_ref")
+    to_cart = _as(to_cart, (N_GAUSS, 8, 8), "to_cart")
+    dh_el = _as(dh_el, (NDOF,), "dh_el")
+    if not (len(frames_el) == len(e_ref) == len(to_cart) == len(dh_el) == m):
+        raise ValueError("all element arrays must have the same number of elements")
+    maps = compress_maps(A)
+    eps = np.empty((m, N_GAUSS, 8))
+    deps = np.empty((m, N_GAUSS, 8))
+    if m:
+        _batch_linearized(x_el, frames_el, e_ref, to_cart, *maps.nonzeros(), dh_el, _n_chunks(m), eps, deps)
+    return eps, deps

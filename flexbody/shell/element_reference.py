@@ -111,13 +111,8 @@ def internal_force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeome
     return force_tangent(x, frames, geom, section, _maps(tying))
 
 
-def force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,
-                  A: np.ndarray, bubble: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Force and tangent for the assumed-strain maps A (:func:`assumed_strain_maps`).
-
-    bubble : None, or the rotation bubble's amplitudes b (2,) (:mod:`flexbody.shell.bubble`); the force and
-        tangent then have 38 components, the last two for b.
-    """
+def _point_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, bubble: np.ndarray | None):
+    """Kinematics, covariant strains e (17, 8) and covariant B (17, 8, ndof) at the evaluation points."""
     d_nodes = relative_rotations(frames)
     kin, e, B = [], [], []
     for p, (N, dN) in enumerate(zip(EVAL_N, EVAL_DN)):
@@ -126,8 +121,35 @@ def force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, sect
         kin.append(k)
         e.append(covariant_strains(k.F))
         B.append(strain_gradient(k.F) @ measures_jacobian(k))   # covariant B (paper Eq. 19-21)
-    e = np.array(e) - geom.e_ref
-    B = np.array(B)                                             # (17, 8, ndof)
+    return kin, np.array(e) - geom.e_ref, np.array(B)
+
+
+def linearized_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, dh: np.ndarray,
+                       tying: bool | str = True) -> tuple[np.ndarray, np.ndarray]:
+    """Cartesian strains eps_g (7, 8) at the Gauss points and their linearization B_g dh along the local
+    nodal motion dh (36,), per node [du, dtheta]: the strains of the mixed Newton iteration,
+    eps_g + B_g dh (MITC6 variants; not MITC7, whose bubble is condensed). dh (36, k): B_g dh is (7, 8, k)."""
+    if tying == "mitc7":
+        raise ValueError("linearized strains are defined for the MITC6 variants, not for tying='mitc7'")
+    _, e, B = _point_strains(x, frames, geom, None)
+    to_cart = np.einsum("gij,gjpk->gipk", geom.to_cart, _maps(tying))
+    return np.einsum("gipk,pk->gi", to_cart, e), np.einsum("gipk,pkn,n...->gi...", to_cart, B, dh)
+
+
+def force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,
+                  A: np.ndarray, bubble: np.ndarray | None = None,
+                  stress: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Force and tangent for the assumed-strain maps A (:func:`assumed_strain_maps`).
+
+    bubble : None, or the rotation bubble's amplitudes b (2,) (:mod:`flexbody.shell.bubble`); the force and
+        tangent then have 38 components, the last two for b.
+    stress : None, or Cartesian stress resultants (7, 8) at the Gauss points that the geometric terms of
+        the tangent carry instead of section @ eps_g: the iteration matrix of the mixed Newton iteration
+        (stresses at the Gauss points iterated as unknowns of their own, condensed point by point:
+        K = sum_g w_g B_g^T C B_g + G(stress); Magisano, Leonetti & Garcea 2017). The force is always the
+        one of the strains.
+    """
+    kin, e, B = _point_strains(x, frames, geom, bubble)
     ndof = B.shape[2]
 
     force = np.zeros(ndof)
@@ -141,7 +163,8 @@ def force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, sect
         w = geom.weights[g]
         force += w * B_g.T @ sigma
         K += w * B_g.T @ section @ B_g                          # material stiffness (paper Eq. 23)
-        s_points += w * (to_cart.T @ sigma).reshape(e.shape)
+        carried = sigma if stress is None else stress[g]
+        s_points += w * (to_cart.T @ carried).reshape(e.shape)
     for k, s in zip(kin, s_points):                             # geometric stiffness (paper Eq. 24)
         if not np.any(s):
             continue

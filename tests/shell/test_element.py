@@ -50,3 +50,29 @@ def test_comparison_can_fail():
     state.x[3] += 1e-9
     f1, _ = body.element_forces(state)
     assert np.abs(f1 - f0).max() > 1e-12 * np.abs(f0).max()
+
+
+@pytest.mark.parametrize("geometry", ["flat", "curved"])
+@pytest.mark.parametrize("tying", [True, False])
+def test_numba_mixed_iteration_matches_reference(geometry, tying):
+    """The iteration matrix with given Gauss-point stresses and the linearized stresses C (eps + B dh)."""
+    mesh = (generators.strip(1.0, 0.6, 2, 1, diagonal="alternate") if geometry == "flat"
+            else generators.cylinder(1.5, 1.0, 2, 1, angle=math.pi / 2))
+    material = ShellMaterial(2.0e5, 0.3, 0.02)
+    fast = ShellBody(mesh, material, tying=tying, kernel="numba")
+    slow = ShellBody(mesh, material, tying=tying, kernel="reference")
+    rng = np.random.default_rng(7)
+    state = deformed_state(fast, rng)
+    m = mesh.n_elements
+    dh = rng.normal(size=(m, 36))
+    s1, s0 = fast.stresses(state, dh), slow.stresses(state, dh)
+    assert np.abs(s1 - s0).max() <= 1e-12 * np.abs(s0).max()
+    own = fast.stresses(state)
+    assert np.abs(s1 - own).max() > 1e-3 * np.abs(own).max()         # dh moves the stresses on
+    f_own, K_own = fast.element_forces(state)
+    np.testing.assert_allclose(fast.element_forces(state, stress=own)[1], K_own, rtol=0, atol=1e-12 * np.abs(K_own).max())
+    f1, K1 = fast.element_forces(state, stress=s1)
+    f0, K0 = slow.element_forces(state, stress=s1)
+    assert np.abs(f1 - f_own).max() <= 1e-13 * np.abs(f_own).max()   # the force is the strains' own
+    assert np.abs(K1 - K0).max() <= 1e-12 * np.abs(K0).max()
+    assert np.abs(K1 - K_own).max() > 1e-6 * np.abs(K_own).max()

@@ -5,7 +5,8 @@ import pytest
 
 from flexbody.lie import so3
 from flexbody.shell.bubble import condensed_bubble
-from flexbody.shell.element_reference import element_strains, internal_force_tangent, strain_energy
+from flexbody.shell.element_reference import (assumed_strain_maps, element_strains, force_tangent,
+                                               internal_force_tangent, linearized_strains, strain_energy)
 from tests.shell.conftest import deformed
 
 EPS = 1e-6
@@ -127,3 +128,50 @@ def test_free_element_has_exactly_six_zero_energy_modes(element, tying):
     assert eig[5] < 1e-7, eig[:8]
     assert eig[6] > 1e-6, eig[:8]
     assert eig[5] < 1e-3 * eig[6], eig[:8]
+
+
+def _perturb_along(x, frames, dh, eps):
+    """The element state moved on by eps dh on the group: x_I + R_I eps du_I, R_I exp(eps dtheta_I)."""
+    h = eps * dh.reshape(6, 6)
+    return (x + np.einsum("nij,nj->ni", frames, h[:, :3]),
+            np.array([R @ so3.exp(t) for R, t in zip(frames, h[:, 3:])]))
+
+
+@pytest.mark.parametrize("tying", [True, False])
+def test_linearized_strains_are_the_directional_derivative(element, tying):
+    """B_g dh against a central difference of the Gauss-point strains along dh on the group."""
+    X, frames, geom, C = element
+    rng = np.random.default_rng(21)
+    x, fr = deformed(X, frames, rng)
+    dh = rng.normal(size=36)
+    eps, deps = linearized_strains(x, fr, geom, dh, tying)
+    np.testing.assert_allclose(eps, element_strains(x, fr, geom, tying), atol=1e-14)
+    fd = (element_strains(*_perturb_along(x, fr, dh, EPS), geom, tying)
+          - element_strains(*_perturb_along(x, fr, dh, -EPS), geom, tying)) / (2 * EPS)
+    assert np.abs(deps - fd).max() < 1e-7 * np.abs(deps).max()
+
+
+@pytest.mark.parametrize("tying", [True, False])
+def test_mixed_iteration_matrix(element, tying):
+    """With given Gauss-point stresses s the tangent is  sum_g w_g B_g^T C B_g  plus the derivative of the
+    virtual work of the fixed stresses, d/dh sum_g w_g B_g^T s_g (by central group differences)."""
+    X, frames, geom, C = element
+    rng = np.random.default_rng(22)
+    x, fr = deformed(X, frames, rng)
+    A = assumed_strain_maps(tying)
+    s = rng.normal(size=(7, 8)) * np.abs(C).max() * 0.05
+    f, K = force_tangent(x, fr, geom, C, A, stress=s)
+    f0, K0 = force_tangent(x, fr, geom, C, A)
+    np.testing.assert_array_equal(f, f0)                         # the force is the strains' own
+
+    def fixed_stress_work(xx, ff):
+        # sum_g w_g B_g^T s_g: the force of the stresses s, whatever the strains
+        return np.einsum("g,gin,gi->n", geom.weights, linearized_strains(xx, ff, geom, np.eye(36), tying)[1], s)
+
+    Kfd = fd_tangent(fixed_stress_work, x, fr)
+    B = linearized_strains(x, fr, geom, np.eye(36), tying)[1]                  # (7, 8, 36)
+    K_material = np.einsum("g,gin,ij,gjm->nm", geom.weights, B, C, B)
+    assert np.abs(K - (K_material + Kfd)).max() < 1e-7 * np.abs(K).max()
+    # and the stresses of the strains give back the ordinary tangent
+    sigma = linearized_strains(x, fr, geom, np.zeros(36), tying)[0] @ C.T
+    assert np.abs(force_tangent(x, fr, geom, C, A, stress=sigma)[1] - K0).max() < 1e-12 * np.abs(K0).max()
