@@ -39,6 +39,8 @@ VARIANTS = {
     "secant": ({}, dict(predictor="secant")),
     "modified": (dict(policy="modified"), {}),
     "line_search": (dict(line_search=True), {}),
+    "mixed": (dict(mixed=True), {}),
+    "displacement": (dict(mixed=False), {}),
 }
 
 

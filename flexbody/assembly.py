@@ -257,10 +257,17 @@ class Model:
         return self._rotate_rows(state, r6).ravel()[self.free]
 
     def _residual6(self, state: ShellState, lam: float, want_tangent: bool):
+        """Nodal residuals r6 (n, 6), element tangents, external load blocks, pressure blocks, and the
+        nodal residuals whose translation part turns with the frames in the iteration matrix: r6 itself,
+        or in the mixed iteration (``state.stress`` set) those of the iterated stresses."""
         self._check_finite(state)
         if not np.isfinite(lam):
             raise FloatingPointError(f"non-finite load factor {lam!r}")
-        fe, Ke = self.body.element_forces(state, want_tangent, state.stress if want_tangent else None)
+        fs = None
+        if want_tangent and state.stress is not None:
+            fe, Ke, fs = self.body.mixed_element_forces(state, state.stress)
+        else:
+            fe, Ke = self.body.element_forces(state, want_tangent)
         self.counters.residuals += 1
         bad = np.flatnonzero(~np.all(np.isfinite(fe), axis=1))
         if bad.size == 0 and want_tangent:
@@ -276,7 +283,12 @@ class Model:
         if bad.size:
             raise FloatingPointError(f"non-finite external load at node {bad[0]}: {fext[bad[0]].tolist()}")
         r6 = r6.reshape(n, 6) - lam * fext
-        return r6, Ke, ext_blocks, press
+        turning = r6
+        if fs is not None:
+            turning = np.zeros(6 * n)
+            np.add.at(turning, self._dof6, fs)
+            turning = turning.reshape(n, 6) - lam * fext
+        return r6, Ke, ext_blocks, press, turning
 
     def _rotate_rows(self, state: ShellState, r6: np.ndarray) -> np.ndarray:
         out = r6.copy()
@@ -285,7 +297,7 @@ class Model:
 
     def residual_and_tangent(self, state: ShellState, lam: float):
         """r (free,) and the tangent K = dr/dq (free x free, CSC) at the state."""
-        r6, Ke, ext_blocks, press = self._residual6(state, lam, want_tangent=True)
+        r6, Ke, ext_blocks, press, turning = self._residual6(state, lam, want_tangent=True)
         self.counters.tangents += 1
         n = self.body.n_nodes
         conn = self.body.mesh.elements
@@ -296,7 +308,7 @@ class Model:
         data = np.zeros(self._indices.size)
         scatter_blocks(Ke, S[conn], C[conn], self._slot_elem, 1.0, data)
         nodal = -lam * ext_blocks
-        nodal[:, :3, 3:] -= hat_many(r6[:, :3])                     # the turning frame: -hat(r_u,I)
+        nodal[:, :3, 3:] -= hat_many(turning[:, :3])                # the turning frame: -hat(r_u,I)
         scatter_blocks(nodal, S[:, None], C[:, None], self._slot_node, 1.0, data)
         for elems, conn_p, local in press:
             blocks = np.zeros((len(elems), 6, 6, 6, 6))

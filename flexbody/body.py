@@ -124,36 +124,50 @@ class ShellBody:
         variants; MITC7 condenses its bubble against the strains' own stresses."""
         return self.tying != "mitc7"
 
-    def element_forces(self, state: ShellState, want_tangent: bool = True, stress: np.ndarray | None = None):
-        """Element internal forces (m, 36) and tangents (m, 36, 36) in the nodal local frames.
-
-        stress : optional (m, 7, 8) Gauss-point stress resultants for the geometric terms of the tangent
-            (the mixed Newton iteration; :func:`flexbody.shell.element_reference.force_tangent`).
-        """
+    def element_forces(self, state: ShellState, want_tangent: bool = True):
+        """Element internal forces (m, 36) and tangents (m, 36, 36) in the nodal local frames."""
         conn = self.mesh.elements
         x_el = state.x[conn]
         fr_el = state.frames[conn]
         C = self.material.section()
         ref = self.reference
         if self.tying == "mitc7":
-            if stress is not None:
-                raise ValueError("the mixed Newton iteration is not available for tying='mitc7'")
             return self._bubble_element_forces(x_el, fr_el, C, want_tangent)
         if self.kernel == "numba":
             from flexbody.shell.element import internal_force_tangent_batch
             return internal_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C,
-                                                self._maps, want_tangent, stress)
+                                                self._maps, want_tangent)
         from flexbody.shell.element_reference import force_tangent
         m = len(conn)
         f = np.zeros((m, 36))
         K = np.zeros((m, 36, 36)) if want_tangent else None
         for e in range(m):
-            fe, Ke = force_tangent(x_el[e], fr_el[e], self._geometry(e), C, self._maps,
-                                   stress=None if stress is None else stress[e])
+            fe, Ke = force_tangent(x_el[e], fr_el[e], self._geometry(e), C, self._maps)
             f[e] = fe
             if want_tangent:
                 K[e] = Ke
         return f, K
+
+    def mixed_element_forces(self, state: ShellState, stress: np.ndarray):
+        """The mixed Newton iteration's element terms for given Gauss-point stress resultants (m, 7, 8):
+        the internal forces of the strains f (m, 36), the iteration matrices K (m, 36, 36), whose
+        geometric terms carry the given stresses, and the forces of these stresses f_stress (m, 36)
+        (:func:`flexbody.shell.element_reference.force_tangent`). MITC6 variants only."""
+        if not self.supports_mixed_iteration:
+            raise ValueError("the mixed Newton iteration is not available for tying='mitc7'")
+        conn = self.mesh.elements
+        x_el = state.x[conn]
+        fr_el = state.frames[conn]
+        C = self.material.section()
+        ref = self.reference
+        if self.kernel == "numba":
+            from flexbody.shell.element import internal_force_tangent_batch
+            return internal_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C,
+                                                self._maps, True, stress)
+        from flexbody.shell.element_reference import force_tangent
+        parts = [force_tangent(x_el[e], fr_el[e], self._geometry(e), C, self._maps, stress=stress[e])
+                 for e in range(len(conn))]
+        return tuple(np.array([p[k] for p in parts]) for k in range(3))
 
     def _geometry(self, e: int):
         from flexbody.shell.geometry import ElementGeometry

@@ -43,7 +43,7 @@ class NewtonSettings:
     # stiffness of an iterate carries the linearized stresses C (eps + B dq) instead of those of its
     # strains (Magisano, Leonetti & Garcea 2017). Same equations, same converged states; no spurious
     # membrane stresses of a thin shell's bending predictor in the next tangent.
-    mixed: bool = False
+    mixed: bool = True
 
     def __post_init__(self) -> None:
         if self.policy not in ("full", "modified"):

@@ -88,3 +88,56 @@ def test_warm_up_compiles_without_changing_anything():
     model.warm_up()
     np.testing.assert_array_equal(model.residual(state, 0.5), r0)
     np.testing.assert_array_equal(model.initial_state().frames, state.frames)
+
+
+def _fixed_stress_rows(model, state, lam):
+    """The equations of the mixed iteration at fixed stresses: rows of f_int(stress) - lam f_ext."""
+    turning = model._residual6(state, lam, want_tangent=True)[4]
+    return model._rotate_rows(state, turning).ravel()[model.free]
+
+
+def test_mixed_iteration_matrix_of_the_model():
+    """K(q, s) - K(q, s_q) is the derivative of the fixed-stress equations S(q) (f(q; s) - lam f_ext) minus
+    that at s_q = the state's own stresses (the material part cancels): the element geometric terms and
+    the turning frame -hat(r_u) both carry the iterated stresses."""
+    model = cylinder_model(kernel="numba")
+    rng = np.random.default_rng(5)
+    state = random_state(model, rng)
+    lam, eps = 0.7, 1e-6
+    own = model.with_stresses(state)
+    other = own.copy()
+    other.stress = own.stress + rng.normal(size=own.stress.shape) * 0.3 * np.abs(own.stress).max()
+
+    def derivative(s):
+        D = np.zeros((model.n_dof, model.n_dof))
+        for j in range(model.n_dof):
+            e = np.zeros(model.n_dof)
+            e[j] = eps
+            plus, minus = model.update(s, e), model.update(s, -e)
+            plus.stress = minus.stress = s.stress          # the stresses held fixed
+            D[:, j] = (_fixed_stress_rows(model, plus, lam) - _fixed_stress_rows(model, minus, lam)) / (2 * eps)
+        return D
+
+    K_other = model.residual_and_tangent(other, lam)[1].toarray()
+    K_own = model.residual_and_tangent(own, lam)[1].toarray()
+    np.testing.assert_allclose(K_own, model.residual_and_tangent(state, lam)[1].toarray(), rtol=0,
+                               atol=1e-10 * np.abs(K_own).max())
+    difference = derivative(other) - derivative(own)
+    assert np.abs(difference).max() > 1e-3 * np.abs(K_own).max()   # the stresses matter
+    assert np.abs((K_other - K_own) - difference).max() < 1e-6 * np.abs(K_own).max()
+    # and the residual is the strains' own whatever the stresses
+    r = model.residual(state, lam)
+    np.testing.assert_allclose(model.residual_and_tangent(other, lam)[0], r, rtol=0, atol=1e-12 * np.abs(r).max())
+
+
+def test_mixed_update_moves_the_stresses_on_linearly():
+    """update() carries sigma <- C (eps(q) + B(q) dq): second-order close to the stresses of the new state."""
+    model = cylinder_model(kernel="numba")
+    rng = np.random.default_rng(6)
+    state = model.with_stresses(random_state(model, rng))
+    dq = rng.normal(size=model.n_dof)
+    gaps = []
+    for t in (1e-2, 5e-3):
+        new = model.update(state, t * dq)
+        gaps.append(np.abs(new.stress - model.with_stresses(new).stress).max())
+    assert 3.0 < gaps[0] / gaps[1] < 5.0          # O(t^2)

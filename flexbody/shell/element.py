@@ -1546,10 +1546,10 @@ def _cross_terms(loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v, nl_rows, n_nl, m
 
 
 @jit
-def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fe, fz, dn, ninv, K1, T0, K, Dp, Dm):
+def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, T0, K, Dp, Dm):
     """K[e] = P^T Kz P + (D P^T[.]) fz (Kz on the accumulation pattern: mirror the symmetric part first).
 
-    f[fe] and fz are the element force (local, and in z) whose stresses the geometric terms carry.
+    f[e] and fz are the element force (local, and in z) whose stresses the geometric terms carry.
 
     Kiso (6 x 6) is the scalar translation-translation part accumulated separately (times I_3).
     """
@@ -1645,9 +1645,9 @@ def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fe, fz, dn, ninv, K1, T0, K, Dp, Dm)
             K[e, 3 + r, k] = T0[r, k]
     # node terms: hat(f_u,I) in (u_I, theta_I) and the D T^-1 terms of Delta(delta d_I)
     for i in range(6):
-        u0 = f[fe, 6 * i]
-        u1 = f[fe, 6 * i + 1]
-        u2 = f[fe, 6 * i + 2]
+        u0 = f[e, 6 * i]
+        u1 = f[e, 6 * i + 1]
+        u2 = f[e, 6 * i + 2]
         r = 6 * i
         c = 6 * i + 3
         K[e, r, c + 1] -= u2
@@ -1695,15 +1695,16 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
            pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
            par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
            nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
-           want_tangent, use_stress, stress, f, K,
+           want_tangent, use_stress, stress, f, fg, K,
            x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps,
-           F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz, fg,
+           F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz,
            cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
            t0, t1, t2, t3, t4, t5):
     """Internal forces f[e] (and tangents K[e]) of the elements e0 <= e < e1.
 
     With use_stress the geometric terms of the tangent carry the given stress resultants stress[e] instead
-    of those of the strains (the mixed Newton iteration); the force is always that of the strains.
+    of those of the strains (the mixed Newton iteration), and fg[e] receives the force of these stresses;
+    f[e] is always the force of the strains.
     """
     for e in range(e0, e1):
         if e + _AHEAD < e1:
@@ -1722,12 +1723,12 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
         _force_to_local(e, fz, fr, Ti, f)
         if not want_tangent:
             continue
-        fv, fe = f, e
+        fv = f
         if use_stress:
             _given_stress_weights(e, used, to_cart, weights, stress, at_ptr, at_g, at_i, at_v, st, Ps)
             _force_points(used, PF, PQ, PT, PR, PX, Ps, g, G2, phi, fz)
-            _force_to_local(0, fz, fr, Ti, fg)
-            fv, fe = fg, 0
+            _force_to_local(e, fz, fr, Ti, fg)
+            fv = fg
         _points_tangent(used, pt_gauss, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
                         loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
                         g, core, Y, Kz, Kiso, Dl, Bl, CBl, t0, t1, t2, t3, t4, t5)
@@ -1739,7 +1740,7 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
                 _cross_terms(loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
                              Ch, Sp, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, F, Q, T, R, X0, X1, d, da, co, s,
                              Dl, Bl, Wp, Y, Yt, K1, Kz)
-        _finish_tangent(e, Kz, Kiso, fr, Ti, fv, fe, fz, dn, ninv, K1, T0, K, t0, t1)
+        _finish_tangent(e, Kz, Kiso, fr, Ti, fv, fz, dn, ninv, K1, T0, K, t0, t1)
 
 
 @numba.njit(cache=True, parallel=True)
@@ -1748,7 +1749,7 @@ def _batch(x_el, fr_el, e_ref, to_cart, weights, C, cblk,
            pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
            par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
            nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
-           want_tangent, use_stress, stress, n_chunks, f, K):
+           want_tangent, use_stress, stress, n_chunks, f, fg, K):
     m = x_el.shape[0]
     npar = max(has_w.shape[0], 1)
     n_rows = max(4 * ((npar + 3) // 4), n_rf + 4 * ((npar - n_rf + 3) // 4))
@@ -1783,7 +1784,6 @@ def _batch(x_el, fr_el, e_ref, to_cart, weights, C, cblk,
         G2 = np.empty((1, 12))
         phi = np.empty((1, 18))
         fz = np.empty((1, NZ))
-        fg = np.empty((1, NDOF))
         cov = np.empty((N_GAUSS, 8))
         st = np.empty((N_GAUSS, 8))
         Ch = np.empty((N_GAUSS, 8, 8))
@@ -1814,9 +1814,9 @@ def _batch(x_el, fr_el, e_ref, to_cart, weights, C, cblk,
                pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
                par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
                nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
-               want_tangent, use_stress, stress, f, K,
+               want_tangent, use_stress, stress, f, fg, K,
                x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps,
-               F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz, fg,
+               F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz,
                cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
                t0, t1, t2, t3, t4, t5)
 
@@ -2225,7 +2225,8 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
     want_tangent : False takes the residual-only path (no tangent, no second variation); K is then None.
     stress : optional (m, 7, 8) Cartesian stress resultants at the Gauss points for the geometric terms of
         the tangent (the mixed Newton iteration, :func:`flexbody.shell.element_reference.force_tangent`);
-        the force is always that of the strains. None: the stresses of the strains.
+        the force is always that of the strains. With a stress (and want_tangent) the result is
+        (f, K, f_stress), f_stress (m, 36) the force of the given stresses.
     """
     x_el = _as(x_el, (6, 3), "x_el")
     m = x_el.shape[0]
@@ -2246,10 +2247,13 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
         raise ValueError(f"stress must have one row per element ({m}), got {len(stress)}")
     maps = compress_maps(A)
     f = np.empty((m, NDOF))
+    fs = np.empty((m, NDOF)) if use_stress else np.empty((1, NDOF))
     K = np.empty((m, NDOF, NDOF)) if want_tangent else np.empty((1, NDOF, NDOF))
     if m:
         _batch(x_el, frames_el, e_ref, to_cart, weights, C, _section_blocks(C), *maps.kernel_args(),
-               bool(want_tangent), use_stress, stress, _n_chunks(m), f, K)
+               bool(want_tangent), use_stress, stress, _n_chunks(m), f, fs, K)
+    if use_stress:
+        return f, K, fs
     return f, (K if want_tangent else None)
 
 

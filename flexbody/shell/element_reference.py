@@ -147,10 +147,12 @@ def force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, sect
         the tangent carry instead of section @ eps_g: the iteration matrix of the mixed Newton iteration
         (stresses at the Gauss points iterated as unknowns of their own, condensed point by point:
         K = sum_g w_g B_g^T C B_g + G(stress); Magisano, Leonetti & Garcea 2017). The force is always the
-        one of the strains.
+        one of the strains; with a stress the result is (force, K, f_stress), f_stress = sum_g w_g B_g^T
+        stress_g the force of the given stresses.
     """
     kin, e, B = _point_strains(x, frames, geom, bubble)
     ndof = B.shape[2]
+    f_stress = np.zeros(ndof)
 
     force = np.zeros(ndof)
     K = np.zeros((ndof, ndof))
@@ -165,13 +167,14 @@ def force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, sect
         K += w * B_g.T @ section @ B_g                          # material stiffness (paper Eq. 23)
         carried = sigma if stress is None else stress[g]
         s_points += w * (to_cart.T @ carried).reshape(e.shape)
+        f_stress += w * B_g.T @ carried
     for k, s in zip(kin, s_points):                             # geometric stiffness (paper Eq. 24)
         if not np.any(s):
             continue
         D = strain_gradient(k.F)
         G = measures_jacobian(k)
         K += G.T @ strain_hessian(s) @ G + second_variation(k, D.T @ s)
-    return force, K
+    return (force, K) if stress is None else (force, K, f_stress)
 
 
 def strain_energy(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,

@@ -160,7 +160,7 @@ def test_mixed_iteration_matrix(element, tying):
     x, fr = deformed(X, frames, rng)
     A = assumed_strain_maps(tying)
     s = rng.normal(size=(7, 8)) * np.abs(C).max() * 0.05
-    f, K = force_tangent(x, fr, geom, C, A, stress=s)
+    f, K, f_s = force_tangent(x, fr, geom, C, A, stress=s)
     f0, K0 = force_tangent(x, fr, geom, C, A)
     np.testing.assert_array_equal(f, f0)                         # the force is the strains' own
 
@@ -172,6 +172,7 @@ def test_mixed_iteration_matrix(element, tying):
     B = linearized_strains(x, fr, geom, np.eye(36), tying)[1]                  # (7, 8, 36)
     K_material = np.einsum("g,gin,ij,gjm->nm", geom.weights, B, C, B)
     assert np.abs(K - (K_material + Kfd)).max() < 1e-7 * np.abs(K).max()
+    np.testing.assert_allclose(f_s, fixed_stress_work(x, fr), rtol=0, atol=1e-12 * np.abs(f_s).max())
     # and the stresses of the strains give back the ordinary tangent
     sigma = linearized_strains(x, fr, geom, np.zeros(36), tying)[0] @ C.T
     assert np.abs(force_tangent(x, fr, geom, C, A, stress=sigma)[1] - K0).max() < 1e-12 * np.abs(K0).max()
