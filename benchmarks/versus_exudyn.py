@@ -30,14 +30,15 @@ from flexbody.scenes import build, run_scene
 LADDERS = {
     "slit_annular_plate": dict(
         flexbody=[dict(n_radial=6, n_circ=30), dict(n_radial=10, n_circ=30), dict(n_radial=8, n_circ=45),
-                  dict(n_radial=8, n_circ=60), dict(n_radial=8, n_circ=90)],
+                  dict(n_radial=8, n_circ=60), dict(n_radial=8, n_circ=90), dict(n_radial=8, n_circ=120)],
         exudyn=[(6, 16), (10, 30), (8, 48)]),
     "pullout_cylinder": dict(
-        flexbody=[dict(n_circ=8, n_axial=6), dict(n_circ=12, n_axial=8), dict(n_circ=16, n_axial=12)],
+        flexbody=[dict(n_circ=8, n_axial=6), dict(n_circ=10, n_axial=6), dict(n_circ=12, n_axial=8),
+                  dict(n_circ=16, n_axial=12)],
         exudyn=[(12, 8), (16, 16)]),
     "hemisphere": dict(
-        flexbody=[dict(n_meridian=8, n_circ=8), dict(n_meridian=12, n_circ=12), dict(n_meridian=16, n_circ=16),
-                  dict(n_meridian=20, n_circ=20)],
+        flexbody=[dict(n_meridian=8, n_circ=8), dict(n_meridian=10, n_circ=10), dict(n_meridian=12, n_circ=12),
+                  dict(n_meridian=14, n_circ=14), dict(n_meridian=16, n_circ=16), dict(n_meridian=20, n_circ=20)],
         exudyn=[(12, 12), (16, 16), (20, 20)]),
 }
 QUICK = {  # one run per code: a smoke test of the script (about a minute)
@@ -57,7 +58,8 @@ def run_flexbody(scene_name: str, params: dict) -> dict:
         mesh += f" {scene.model.body.element_name}"
     return dict(code="flexbody", mesh=mesh, dofs=d["dofs"],
                 steps=d["steps"], iterations=d["newton_iterations"], factorizations=d["factorizations"],
-                cpu_s=cpu, wall_s=d["wall_time_s"], error=d["max_rel_error"], converged=d["converged"])
+                cpu_s=cpu, wall_s=d["wall_time_s"], error=d["max_rel_error"], converged=d["converged"],
+                outputs=d["outputs"])
 
 
 def run_exudyn(scene_name: str, nx: int, ny: int) -> dict:
@@ -67,7 +69,8 @@ def run_exudyn(scene_name: str, nx: int, ny: int) -> dict:
     d = run.as_dict()
     return dict(code="exudyn ANCF", mesh=f"{nx}x{ny}", dofs=d["dofs"], steps=d["steps"],
                 iterations=d["newton_iterations"], factorizations=None, cpu_s=d["cpu_time_s"],
-                wall_s=d["wall_time_s"], error=d["max_rel_error"], converged=d["converged"])
+                wall_s=d["wall_time_s"], error=d["max_rel_error"], converged=d["converged"],
+                outputs=d["outputs"])
 
 
 def time_to_accuracy(ours: list[dict], theirs: list[dict]) -> list[dict]:
@@ -110,12 +113,14 @@ def main() -> None:
             runs_f += [run_flexbody(name, {**p, "tying": args.also_tying}) for p in ladders[name]["flexbody"]]
         runs_x = [run_exudyn(name, nx, ny) for nx, ny in ladders[name]["exudyn"]]
         print(f"\n## {name}\n")
-        print("| code | mesh | DoFs | steps | Newton it. | factorizations | CPU [s] | wall [s] | max rel. error |")
-        print("|---|---|---|---|---|---|---|---|---|")
+        print("| code | mesh | DoFs | steps | Newton it. | factorizations | CPU [s] | wall [s] | max rel. error "
+              "| outputs at the last level |")
+        print("|---|---|---|---|---|---|---|---|---|---|")
         for r in runs_f + runs_x:
             err = f"{100 * r['error']:.2f} %" if r["converged"] else "did not converge"
+            last = ", ".join(f"{k} {v:.5g}" for k, v in r["outputs"].items())
             print(f"| {r['code']} | {r['mesh']} | {r['dofs']} | {r['steps']} | {r['iterations']} | "
-                  f"{_fmt(r['factorizations'], 'd')} | {r['cpu_s']:.2f} | {r['wall_s']:.2f} | {err} |")
+                  f"{_fmt(r['factorizations'], 'd')} | {r['cpu_s']:.2f} | {r['wall_s']:.2f} | {err} | {last} |")
         ratios = time_to_accuracy(runs_f, runs_x)
         print("\n| exudyn mesh | exudyn error | exudyn CPU [s] | cheapest flexbody at <= that error | its error | "
               "its CPU [s] | exudyn / flexbody CPU |")

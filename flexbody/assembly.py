@@ -360,6 +360,11 @@ class Model:
             new.stress = self.body.stresses(state, h[self.body.mesh.elements].reshape(-1, 36))
         return new
 
+    @property
+    def supports_mixed_iteration(self) -> bool:
+        """Whether the static solvers can run the mixed Newton iteration on this model (MITC6 bodies)."""
+        return self.body.supports_mixed_iteration
+
     def with_stresses(self, state: ShellState) -> ShellState:
         """The state with the Gauss-point stresses of its strains: the start of a mixed Newton iteration."""
         new = state.copy()

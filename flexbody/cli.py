@@ -195,7 +195,8 @@ def summary_lines(summary) -> list[str]:
         f"DoFs / elements  {d['dofs']} / {d['elements']}",
         f"steps            {d['steps']}  ({reached})",
         f"Newton           {d['newton_iterations']} iterations, {d['tangent_updates']} tangent updates, "
-        f"{d['factorizations']} factorizations",
+        f"{d['factorizations']} factorizations" + (f" ({d['newton_iteration']} iteration)"
+                                                   if "newton_iteration" in d else ""),
         f"wall time        {d['wall_time_s']:.2f} s",
     ]
     for k, v in d["outputs"].items():

@@ -50,6 +50,8 @@ class NewtonSettings:
             raise ValueError(f"Newton policy must be 'full' or 'modified', got {self.policy!r}")
         if not (self.rtol > 0 and self.max_iterations >= 1):
             raise ValueError("Newton rtol must be > 0 and max_iterations >= 1")
+        if not isinstance(self.mixed, bool):
+            raise ValueError(f"Newton mixed must be true or false, got {self.mixed!r}")
         if not (self.lazy_tangent >= 0):
             raise ValueError(f"Newton lazy_tangent must be >= 0, got {self.lazy_tangent!r}")
 
@@ -62,6 +64,7 @@ class NewtonStats:
     tangent_updates: int = 0
     factorizations: int = 0
     residual_evaluations: int = 0
+    iteration: str = "displacement"   # or "mixed": the Newton iteration the run used (NewtonSettings.mixed)
 
 
 @dataclass

@@ -82,11 +82,15 @@ def _failure_message(f: FailureReport) -> str:
             f"converged load factor {f.load_factor:.6g} (state kept)")
 
 
+def _mixed(model, settings: NewtonSettings) -> bool:
+    """Whether the run uses the mixed Newton iteration: asked for, and the model supports it (MITC6 bodies;
+    a MITC7 body, or a model without stresses, runs the displacement iteration)."""
+    return settings.mixed and getattr(model, "supports_mixed_iteration", False)
+
+
 def _with_stresses(model, state, settings: NewtonSettings):
     """The start of a step: under the mixed iteration, the state with the stresses of its strains."""
-    if settings.mixed and model.body.supports_mixed_iteration:
-        return model.with_stresses(state)
-    return state
+    return model.with_stresses(state) if _mixed(model, settings) else state
 
 
 def load_control(model, load_factors=None, *, n_steps: int = 10, settings: NewtonSettings | None = None,
@@ -132,7 +136,7 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
         raise ValueError(f"grow_iterations must be an integer >= 0 or None, got {grow_iterations!r}")
     _check_support(model)
     state = model.initial_state() if state is None else state
-    solver, stats = LinearSolver(), NewtonStats()
+    solver, stats = LinearSolver(), NewtonStats(iteration="mixed" if _mixed(model, settings) else "displacement")
     records: list[StepRecord] = []
     lam, t0, cutbacks = 0.0, time.perf_counter(), 0
     first_step = targets[0]
@@ -240,7 +244,7 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                          f"{initial_increment!r}")
     _check_support(model)
     state = model.initial_state() if state is None else state
-    solver, stats = LinearSolver(), NewtonStats()
+    solver, stats = LinearSolver(), NewtonStats(iteration="mixed" if _mixed(model, settings) else "displacement")
     records: list[StepRecord] = []
     t0, lam, cutbacks, attempts = time.perf_counter(), 0.0, 0, 0
 

@@ -229,7 +229,7 @@ class RunSummary:
             "scene": self.scene, "kind": "static", "dofs": self.dofs, "elements": self.elements,
             "steps": len(self.result.records), "newton_iterations": st.iterations,
             "tangent_updates": st.tangent_updates, "factorizations": st.factorizations,
-            "wall_time_s": self.wall_time_s, "converged": self.result.converged,
+            "newton_iteration": st.iteration, "wall_time_s": self.wall_time_s, "converged": self.result.converged,
             "message": self.result.message, "load_factor": self.result.load_factor,
             "outputs": {k: v[-1] for k, v in self.history.items() if k != "load_factor" and v},
             "errors": self.errors, "max_rel_error": self.max_rel_error,
