@@ -1,6 +1,6 @@
 """Fewer Newton iterations, tangents and factorizations on the static benchmarks, for the same answers.
 
-    python benchmarks/fewer_iterations.py [SCENE ...] [--variants classical default secant modified line_search]
+    python benchmarks/fewer_iterations.py [SCENE ...] [--variants classical displacement default secant modified ...]
 
 For each scene and variant: load steps, Newton iterations, tangent updates, factorizations, wall and CPU
 time (``time.process_time``, all threads: on a shared machine the wall time is an upper bound), the max
@@ -9,11 +9,16 @@ levels against the first variant (relative to max |reference|).
 
 Variants (all with the scene's own tolerances):
 
-- ``classical``: the solver as it was until 2026-12: a tangent and a factorization at every Newton
-  iteration (``lazy_tangent=0``) and steps that grow only after <= 4 iterations (``grow_iterations=4``);
-- ``default``: the current defaults (lazy tangent near convergence: round-off floor and force tests on the
-  residual alone, chord steps, the factorization carried into the next step or arc-length predictor;
-  steps that grow after at most half of ``max_iterations``);
+- ``classical``: the solver as it was until 2026-12: the displacement Newton iteration with a tangent and
+  a factorization at every iteration (``lazy_tangent=0, mixed=False``) and steps that grow only after <= 4
+  iterations (``grow_iterations=4``);
+- ``default``: the current defaults (the mixed Newton iteration, docs/theory.md; the lazy tangent near
+  convergence: round-off floor and force tests on the residual alone, chord steps, the factorization
+  carried into the next step or arc-length predictor; steps that grow after at most half of
+  ``max_iterations``);
+- ``displacement``: the defaults with the displacement iteration (``mixed=False``: the defaults until
+  2026-12-02);
+- ``mixed``: the defaults with ``mixed=True`` (the same as ``default`` now);
 - ``secant``: the defaults with the secant predictor (``load_control(predictor="secant")``);
 - ``modified``, ``line_search``: the defaults with ``policy="modified"`` or ``line_search=True``.
 """
@@ -34,7 +39,7 @@ from integrators.static import load_control
 
 DEFAULT = ["slit_annular_plate", "hemisphere", "pullout_cylinder", "cantilever_end_shear", "cantilever_end_moment"]
 VARIANTS = {
-    "classical": (dict(lazy_tangent=0.0), dict(grow_iterations=4)),
+    "classical": (dict(lazy_tangent=0.0, mixed=False), dict(grow_iterations=4)),
     "default": ({}, {}),
     "secant": ({}, dict(predictor="secant")),
     "modified": (dict(policy="modified"), {}),

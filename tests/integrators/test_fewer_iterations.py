@@ -154,12 +154,14 @@ def test_failed_predicted_and_plain_starts_still_stop_with_a_report():
 
 
 def test_steps_grow_between_distant_levels_and_hit_every_level():
-    """A strip under end shear takes 5-11 Newton iterations per step whatever its size: growing only after
-    <= 4 of them (the old rule) crawls at the first step's size; every prescribed level is still reached."""
+    """A strip under end shear takes 5-11 displacement-Newton iterations per step whatever its size: growing
+    only after <= 4 of them (the old rule) crawls at the first step's size; every prescribed level is still
+    reached. (The mixed iteration takes 3-4, and both rules grow its steps.)"""
     scene = builtin.cantilever_end_shear(nx=4)
     levels = [0.05, 0.5, 1.0]
-    old, states_o = _run(scene.model, levels, grow_iterations=4)
-    new, states_n = _run(scene.model, levels)
+    displacement = NewtonSettings(mixed=False)
+    old, states_o = _run(scene.model, levels, displacement, grow_iterations=4)
+    new, states_n = _run(scene.model, levels, displacement)
     assert len(new.records) < len(old.records)
     assert new.stats.factorizations < old.stats.factorizations
     reached = {round(r.load_factor, 12) for r in new.records}
@@ -203,9 +205,10 @@ def test_a_residual_whose_norm_overflows_is_reported_not_raised():
 
 
 def test_benchmark_script_classical_variant_is_the_old_solver():
-    """benchmarks/fewer_iterations.py: its "classical" variant is the solver before the lazy tangent (on the
-    end-shear strip it took 117 iterations, 135 tangents, 117 factorizations, docs/benchmarks.md until
-    2026-12), and the defaults land on the same outputs with fewer tangents and factorizations."""
+    """benchmarks/fewer_iterations.py: its "classical" variant is the solver before the lazy tangent and the
+    mixed iteration (on the end-shear strip it took 117 iterations, 135 tangents, 117 factorizations,
+    docs/benchmarks.md until 2026-12), and the defaults land on the same outputs with fewer tangents and
+    factorizations."""
     import importlib.util
     import sys
     from pathlib import Path
