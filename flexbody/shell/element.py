@@ -29,6 +29,11 @@ either scheme). Their material stiffness is one symmetric rank-17 update S^T (su
 element; the rows S_k of the membrane parameters (rotation-free) are W_k x, constant 6 x 6 matrices W_k of
 the shape functions times the nodal positions. Evaluation points that no row uses are skipped.
 
+The mixed Newton iteration (docs/theory.md) needs two more things, both here: the tangent whose geometric
+terms carry given Gauss-point stresses (``stress=`` of :func:`internal_force_tangent_batch`: the point
+weights Ps and the node terms are those of the given stresses, the force stays that of the strains), and the
+strains linearized along a nodal motion, B dh (:func:`linearized_strains_batch`, from the point kinematics).
+
 SO(3): ``flexbody.lie.kernels.log_into`` and ``kernels.coefficients`` (closed forms above the series switch);
 below the switch the coefficients are the same Taylor series ``so3.SERIES``, evaluated fused, once per point.
 The tangent-operator derivatives are the formulas of ``kernels.d_tangent_into`` / ``d_tangent_inv_into`` /
