@@ -126,11 +126,7 @@ class ShellBody:
 
     def element_forces(self, state: ShellState, want_tangent: bool = True):
         """Element internal forces (m, 36) and tangents (m, 36, 36) in the nodal local frames."""
-        conn = self.mesh.elements
-        x_el = state.x[conn]
-        fr_el = state.frames[conn]
-        C = self.material.section()
-        ref = self.reference
+        x_el, fr_el, C, ref = self._element_arrays(state)
         if self.tying == "mitc7":
             return self._bubble_element_forces(x_el, fr_el, C, want_tangent)
         if self.kernel == "numba":
@@ -138,7 +134,7 @@ class ShellBody:
             return internal_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C,
                                                 self._maps, want_tangent)
         from flexbody.shell.element_reference import force_tangent
-        m = len(conn)
+        m = len(x_el)
         f = np.zeros((m, 36))
         K = np.zeros((m, 36, 36)) if want_tangent else None
         for e in range(m):
@@ -155,19 +151,20 @@ class ShellBody:
         (:func:`flexbody.shell.element_reference.force_tangent`). MITC6 variants only."""
         if not self.supports_mixed_iteration:
             raise ValueError("the mixed Newton iteration is not available for tying='mitc7'")
-        conn = self.mesh.elements
-        x_el = state.x[conn]
-        fr_el = state.frames[conn]
-        C = self.material.section()
-        ref = self.reference
+        x_el, fr_el, C, ref = self._element_arrays(state)
         if self.kernel == "numba":
             from flexbody.shell.element import internal_force_tangent_batch
             return internal_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C,
                                                 self._maps, True, stress)
         from flexbody.shell.element_reference import force_tangent
         parts = [force_tangent(x_el[e], fr_el[e], self._geometry(e), C, self._maps, stress=stress[e])
-                 for e in range(len(conn))]
+                 for e in range(len(x_el))]
         return tuple(np.array([p[k] for p in parts]) for k in range(3))
+
+    def _element_arrays(self, state: ShellState):
+        """Nodal positions (m, 6, 3) and frames (m, 6, 3, 3) per element, the section, the reference data."""
+        conn = self.mesh.elements
+        return state.x[conn], state.frames[conn], self.material.section(), self.reference
 
     def _geometry(self, e: int):
         from flexbody.shell.geometry import ElementGeometry

@@ -1827,44 +1827,6 @@ def _batch(x_el, fr_el, e_ref, to_cart, weights, C, cblk,
 
 
 @jit
-def _chunk_strains(e0, e1, x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, out,
-                   x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, cov, t0):
-    for e in range(e0, e1):
-        _load_element(e, x_el, fr_el, x, fr)
-        _node_setup(fr, dn, Ti, ninv, t0)
-        _interpolate_points(used, dn, Pd, Pda)
-        _point_coefficients(used, Pd, Pco)
-        _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, False)
-        _strains_points(e, used, e_ref, PF, Pe)
-        _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, out)
-
-
-@numba.njit(cache=True, parallel=True)
-def _batch_strains(x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, n_chunks, out):
-    m = x_el.shape[0]
-    for ch in prange(n_chunks):
-        x = np.empty((6, 3))
-        fr = np.empty((6, 3, 3))
-        dn = np.empty((6, 3))
-        Ti = np.empty((6, 3, 3))
-        ninv = np.empty((6, 2))
-        Pd = np.empty((N_EVAL, 3))
-        Pda = np.empty((N_EVAL, 2, 3))
-        Pco = np.empty((N_EVAL, 9))
-        PQ = np.empty((N_EVAL, 3, 3))
-        PT = np.empty((N_EVAL, 3, 3))
-        PR = np.empty((N_EVAL, 3, 3))
-        PF = np.empty((N_EVAL, 4, 3))
-        PX = np.empty((N_EVAL, 2, 3, 3))
-        Pe = np.empty((N_EVAL, 8))
-        cov = np.empty((N_GAUSS, 8))
-        t0 = np.empty((3, 3))
-        _chunk_strains((ch * m) // n_chunks, ((ch + 1) * m) // n_chunks, x_el, fr_el, e_ref, to_cart, used,
-                       a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, out, x, fr, dn, Ti, ninv, Pd, Pda, Pco,
-                       PQ, PT, PR, PF, PX, Pe, cov, t0)
-
-
-@jit
 def _strain_increments_points(e, used, fr, Ti, dh, PF, PQ, PT, PR, PX, dX, dD, dPe):
     """dPe[p] = D(F_p) G_p dh[e]: the covariant strains at the used points linearized along the local nodal
     motion dh[e] = [du_I, dtheta_I] (kinematics.measures_jacobian, strain_gradient):
@@ -1941,23 +1903,26 @@ def _strain_increments_points(e, used, fr, Ti, dh, PF, PQ, PT, PR, PX, dX, dD, d
 
 
 @jit
-def _chunk_linearized(e0, e1, x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
-                      dh, eps, deps, x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, dX, dD, cov, t0):
+def _chunk_strains(e0, e1, x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, out,
+                   with_increment, dh, deps, x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, dX, dD, cov,
+                   t0):
+    """Gauss-point strains out[e] and, with_increment, their linearization deps[e] = B dh[e]."""
     for e in range(e0, e1):
         _load_element(e, x_el, fr_el, x, fr)
         _node_setup(fr, dn, Ti, ninv, t0)
         _interpolate_points(used, dn, Pd, Pda)
         _point_coefficients(used, Pd, Pco)
-        _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, True)
+        _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, with_increment)
         _strains_points(e, used, e_ref, PF, Pe)
-        _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, eps)
-        _strain_increments_points(e, used, fr, Ti, dh, PF, PQ, PT, PR, PX, dX, dD, Pe)
-        _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, deps)
+        _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, out)
+        if with_increment:
+            _strain_increments_points(e, used, fr, Ti, dh, PF, PQ, PT, PR, PX, dX, dD, Pe)
+            _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, deps)
 
 
 @numba.njit(cache=True, parallel=True)
-def _batch_linearized(x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, dh,
-                      n_chunks, eps, deps):
+def _batch_strains(x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, n_chunks, out,
+                   with_increment, dh, deps):
     m = x_el.shape[0]
     for ch in prange(n_chunks):
         x = np.empty((6, 3))
@@ -1978,9 +1943,9 @@ def _batch_linearized(x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, a
         dD = np.empty((6, 3))
         cov = np.empty((N_GAUSS, 8))
         t0 = np.empty((3, 3))
-        _chunk_linearized((ch * m) // n_chunks, ((ch + 1) * m) // n_chunks, x_el, fr_el, e_ref, to_cart, used,
-                          a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, dh, eps, deps, x, fr, dn, Ti, ninv,
-                          Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, dX, dD, cov, t0)
+        _chunk_strains((ch * m) // n_chunks, ((ch + 1) * m) // n_chunks, x_el, fr_el, e_ref, to_cart, used,
+                       a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, out, with_increment, dh, deps,
+                       x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, dX, dD, cov, t0)
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -2278,7 +2243,8 @@ def element_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.nda
     maps = compress_maps(A)
     out = np.empty((m, N_GAUSS, 8))
     if m:
-        _batch_strains(x_el, frames_el, e_ref, to_cart, *maps.nonzeros(), _n_chunks(m), out)
+        _batch_strains(x_el, frames_el, e_ref, to_cart, *maps.nonzeros(), _n_chunks(m), out,
+                       False, np.zeros((1, NDOF)), np.zeros((1, N_GAUSS, 8)))
     return out
 
 
@@ -2301,5 +2267,5 @@ def linearized_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.
     eps = np.empty((m, N_GAUSS, 8))
     deps = np.empty((m, N_GAUSS, 8))
     if m:
-        _batch_linearized(x_el, frames_el, e_ref, to_cart, *maps.nonzeros(), dh_el, _n_chunks(m), eps, deps)
+        _batch_strains(x_el, frames_el, e_ref, to_cart, *maps.nonzeros(), _n_chunks(m), eps, True, dh_el, deps)
     return eps, deps
