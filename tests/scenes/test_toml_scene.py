@@ -93,7 +93,9 @@ def test_sections_become_the_model(tmp_path):
 def test_overrides_by_dotted_or_unambiguous_key(tmp_path):
     path = write(tmp_path, PLATE)
     scene = load_toml_scene(path, {"nx": 3, "material.thickness": 0.01, "load.1.value": 5.0,
-                                   "analysis.newton.max_iterations": 7, "density": 1.0})
+                                   "analysis.newton.max_iterations": 7, "density": 1.0,
+                                   "analysis.newton.mixed": False})
+    assert scene.analysis.newton.mixed is False and load_toml_scene(path).analysis.newton.mixed is True
     assert scene.model.body.mesh.n_elements == 2 * 3 * 2
     assert scene.model.body.material.thickness == 0.01 and scene.model.body.material.density == 1.0
     assert scene.model.loads[1].pressure == 5.0 and scene.analysis.newton.max_iterations == 7
@@ -144,6 +146,8 @@ def test_reference_csv_is_read_relative_to_the_scene_file(tmp_path):
     (("[[output]]", "[[output]]\nnodes = [1]"), "[output.0] needs exactly one node selection of set, nodes, near, plane"),
     (("normal = [0.0, 1.0, 0.0] }", "normal = [0.0, 1.0, 0.0] }\n[analysis.newton]\npolicy = \"lazy\""),
      "Newton policy must be 'full' or 'modified', got 'lazy'"),
+    (("normal = [0.0, 1.0, 0.0] }", "normal = [0.0, 1.0, 0.0] }\n[analysis.newton]\nmixed = 1"),
+     "analysis.newton.mixed"),
     (("point = [0.0, 0.5, 0.0]", "point = [0.0, 0.7, 0.0]"), "bc.1.plane selects no nodes"),
     (("steps = 2", "steps = 2\n[reference]\nfile = \"missing.csv\""), "reference.file: reference CSV"),
     (("[[bc]]", "[element]\ntying = \"mitc9\"\n[[bc]]"),
