@@ -177,23 +177,20 @@ class ShellBody:
         the mixed Newton iteration (MITC6 variants)."""
         if not self.supports_mixed_iteration:
             raise ValueError("linearized stresses are not available for tying='mitc7'")
-        conn = self.mesh.elements
-        m = len(conn)
+        x_el, fr_el, C, ref = self._element_arrays(state)
+        m = len(x_el)
         dh_el = np.zeros((m, 36)) if dh_el is None else np.asarray(dh_el, dtype=float)
         if dh_el.shape != (m, 36):
             raise ValueError(f"dh_el must have shape ({m}, 36), got {dh_el.shape}")
-        ref = self.reference
         if self.kernel == "numba":
             from flexbody.shell.element import linearized_strains_batch
-            eps, deps = linearized_strains_batch(state.x[conn], state.frames[conn], ref.e_ref, ref.to_cart,
-                                                 self._maps, dh_el)
+            eps, deps = linearized_strains_batch(x_el, fr_el, ref.e_ref, ref.to_cart, self._maps, dh_el)
         else:
             from flexbody.shell.element_reference import linearized_strains
-            pairs = [linearized_strains(state.x[c], state.frames[c], self._geometry(e), dh_el[e], self.tying)
-                     for e, c in enumerate(conn)]
+            pairs = [linearized_strains(x_el[e], fr_el[e], self._geometry(e), dh_el[e], self.tying) for e in range(m)]
             eps = np.array([p[0] for p in pairs]).reshape(m, N_GAUSS, 8)
             deps = np.array([p[1] for p in pairs]).reshape(m, N_GAUSS, 8)
-        return (eps + deps) @ self.material.section().T
+        return (eps + deps) @ C.T
 
     def _bubble_element_forces(self, x_el, fr_el, C, want_tangent):
         """MITC7 elements: the rotation bubble condensed element by element, warm-started."""
