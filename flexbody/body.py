@@ -187,7 +187,8 @@ class ShellBody:
             eps, deps = linearized_strains_batch(x_el, fr_el, ref.e_ref, ref.to_cart, self._maps, dh_el)
         else:
             from flexbody.shell.element_reference import linearized_strains
-            pairs = [linearized_strains(x_el[e], fr_el[e], self._geometry(e), dh_el[e], self.tying) for e in range(m)]
+            pairs = [linearized_strains(x_el[e], fr_el[e], self._geometry(e), dh_el[e], self.tying)
+                     for e in range(m)]
             eps = np.array([p[0] for p in pairs]).reshape(m, N_GAUSS, 8)
             deps = np.array([p[1] for p in pairs]).reshape(m, N_GAUSS, 8)
         return (eps + deps) @ C.T

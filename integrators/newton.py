@@ -38,8 +38,8 @@ class NewtonSettings:
     # (force test; increment test with that factorization), and chord steps are taken on that factorization
     # while the residual contracts by refresh_ratio. 0: classical Newton (a tangent every iteration).
     lazy_tangent: float = 1e-4
-    # the mixed Newton iteration (the static solvers; MITC6 elements): the stress resultants at the Gauss
-    # points are iterated as unknowns of their own, condensed point by point, so that the geometric
+    # the mixed Newton iteration (the static solvers, "full" policy; MITC6 elements): the stress resultants at
+    # the Gauss points are iterated as unknowns of their own, condensed point by point, so that the geometric
     # stiffness of an iterate carries the linearized stresses C (eps + B dq) instead of those of its
     # strains (Magisano, Leonetti & Garcea 2017). Same equations, same converged states; no spurious
     # membrane stresses of a thin shell's bending predictor in the next tangent.

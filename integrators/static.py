@@ -83,9 +83,12 @@ def _failure_message(f: FailureReport) -> str:
 
 
 def _mixed(model, settings: NewtonSettings) -> bool:
-    """Whether the run uses the mixed Newton iteration: asked for, and the model supports it (MITC6 bodies;
-    a MITC7 body, or a model without stresses, runs the displacement iteration)."""
-    return settings.mixed and getattr(model, "supports_mixed_iteration", False)
+    """Whether the run uses the mixed Newton iteration: asked for, under the "full" policy, and the model
+    supports it (MITC6 bodies). A MITC7 body, a model without stresses and the "modified" policy run the
+    displacement iteration: on a factorization kept from older iterates the mixed iteration converges worse
+    than the displacement one (refresh ratio 0.5: hemisphere 104 factorizations against 77, end moment 1102
+    against 139; docs/performance.md), on fresh ones far better (hemisphere 47)."""
+    return settings.mixed and settings.policy == "full" and getattr(model, "supports_mixed_iteration", False)
 
 
 def _with_stresses(model, state, settings: NewtonSettings):

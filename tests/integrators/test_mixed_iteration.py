@@ -86,6 +86,9 @@ def test_where_the_mixed_iteration_does_not_apply():
     assert result.converged and result.stats.iteration == "displacement"
     with pytest.raises(ValueError, match="mitc7"):
         scene.model.body.mixed_element_forces(scene.model.initial_state(), np.zeros((1, 7, 8)))
+    modified = load_control(builtin.cantilever_end_shear(nx=4).model, [0.5], settings=dataclasses.replace(
+        MIXED, policy="modified"))                                           # an old matrix: displacement
+    assert modified.converged and modified.stats.iteration == "displacement"
     toy = load_control(CubicSpring(load=0.01), [0.5, 1.0], settings=MIXED)   # no stresses at all
     assert toy.converged and toy.stats.iteration == "displacement"
     with pytest.raises(ValueError, match="mixed"):
