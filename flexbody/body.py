@@ -144,7 +144,8 @@ class ShellBody:
                 K[e] = Ke
         return f, K
 
-    def mixed_element_forces(self, state: ShellState, stress: np.ndarray):
+    def mixed_element_forces(self, state: ShellState,
+                             stress: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The mixed Newton iteration's element terms for given Gauss-point stress resultants (m, 7, 8):
         the internal forces of the strains f (m, 36), the iteration matrices K (m, 36, 36), whose
         geometric terms carry the given stresses, and the forces of these stresses f_stress (m, 36)
