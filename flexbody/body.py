@@ -153,6 +153,9 @@ class ShellBody:
         if not self.supports_mixed_iteration:
             raise ValueError("the mixed Newton iteration is not available for tying='mitc7'")
         x_el, fr_el, C, ref = self._element_arrays(state)
+        stress = np.asarray(stress, dtype=float)
+        if stress.shape != (len(x_el), N_GAUSS, 8):
+            raise ValueError(f"stress must have shape ({len(x_el)}, {N_GAUSS}, 8), got {stress.shape}")
         if self.kernel == "numba":
             from flexbody.shell.element import internal_force_tangent_batch
             return internal_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C,

@@ -2179,6 +2179,18 @@ def _as(a, shape_tail, name):
     return a
 
 
+def _element_arrays(x_el, frames_el, e_ref, to_cart, **more):
+    """The kernels' per-element inputs as contiguous float64 arrays, their shapes and common length checked.
+
+    more : name=(array, shape_tail) for further per-element arrays (weights, dh_el, b0, ...), in that order.
+    """
+    arrays = [_as(x_el, (6, 3), "x_el"), _as(frames_el, (6, 3, 3), "frames_el"), _as(e_ref, (N_EVAL, 8), "e_ref"),
+              _as(to_cart, (N_GAUSS, 8, 8), "to_cart")] + [_as(a, tail, name) for name, (a, tail) in more.items()]
+    if any(len(a) != len(arrays[0]) for a in arrays):
+        raise ValueError("all element arrays must have the same number of elements")
+    return arrays
+
+
 def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.ndarray,
                                  to_cart: np.ndarray, weights: np.ndarray, section: np.ndarray,
                                  A: np.ndarray, want_tangent: bool = True, stress: np.ndarray | None = None):
@@ -2198,14 +2210,9 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
         the force is always that of the strains. With a stress (and want_tangent) the result is
         (f, K, f_stress), f_stress (m, 36) the force of the given stresses.
     """
-    x_el = _as(x_el, (6, 3), "x_el")
+    x_el, frames_el, e_ref, to_cart, weights = _element_arrays(x_el, frames_el, e_ref, to_cart,
+                                                               weights=(weights, (N_GAUSS,)))
     m = x_el.shape[0]
-    frames_el = _as(frames_el, (6, 3, 3), "frames_el")
-    e_ref = _as(e_ref, (N_EVAL, 8), "e_ref")
-    to_cart = _as(to_cart, (N_GAUSS, 8, 8), "to_cart")
-    weights = _as(weights, (N_GAUSS,), "weights")
-    if not (len(frames_el) == len(e_ref) == len(to_cart) == len(weights) == m):
-        raise ValueError("all element arrays must have the same number of elements")
     C = np.ascontiguousarray(section, dtype=np.float64)
     if C.shape != (8, 8):
         raise ValueError(f"section must be (8, 8), got {C.shape}")
@@ -2233,13 +2240,8 @@ def element_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.nda
 
     Same result as :func:`flexbody.shell.element_reference.element_strains` element by element.
     """
-    x_el = _as(x_el, (6, 3), "x_el")
+    x_el, frames_el, e_ref, to_cart = _element_arrays(x_el, frames_el, e_ref, to_cart)
     m = x_el.shape[0]
-    frames_el = _as(frames_el, (6, 3, 3), "frames_el")
-    e_ref = _as(e_ref, (N_EVAL, 8), "e_ref")
-    to_cart = _as(to_cart, (N_GAUSS, 8, 8), "to_cart")
-    if not (len(frames_el) == len(e_ref) == len(to_cart) == m):
-        raise ValueError("all element arrays must have the same number of elements")
     maps = compress_maps(A)
     out = np.empty((m, N_GAUSS, 8))
     if m:
@@ -2255,14 +2257,9 @@ def linearized_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.
 
     Same result as :func:`flexbody.shell.element_reference.linearized_strains` element by element.
     """
-    x_el = _as(x_el, (6, 3), "x_el")
+    x_el, frames_el, e_ref, to_cart, dh_el = _element_arrays(x_el, frames_el, e_ref, to_cart,
+                                                             dh_el=(dh_el, (NDOF,)))
     m = x_el.shape[0]
-    frames_el = _as(frames_el, (6, 3, 3), "frames_el")
-    e_ref = _as(e_ref, (N_EVAL, 8), "e_ref")
-    to_cart = _as(to_cart, (N_GAUSS, 8, 8), "to_cart")
-    dh_el = _as(dh_el, (NDOF,), "dh_el")
-    if not (len(frames_el) == len(e_ref) == len(to_cart) == len(dh_el) == m):
-        raise ValueError("all element arrays must have the same number of elements")
     maps = compress_maps(A)
     eps = np.empty((m, N_GAUSS, 8))
     deps = np.empty((m, N_GAUSS, 8))

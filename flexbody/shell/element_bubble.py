@@ -57,7 +57,7 @@ from numba import prange
 from flexbody.lie import kernels as lk
 from flexbody.lie.so3 import SERIES, SERIES_SWITCH
 from flexbody.shell.bubble import BUBBLE_MAX_ITERATIONS, BUBBLE_TOL, bubble_step
-from flexbody.shell.element import _FLAGS, _as
+from flexbody.shell.element import _FLAGS, _element_arrays
 from flexbody.shell.element_reference import EVAL_DNB, EVAL_NB
 from flexbody.shell.geometry import EVAL_DN, EVAL_N, N_GAUSS
 
@@ -1026,15 +1026,10 @@ def condensed_force_tangent_batch(x_el: np.ndarray, fr_el: np.ndarray, e_ref: np
     K : (m, 36, 36) condensed tangents (NaN where f is), or an empty (0, 36, 36) array if not want_tangent
     b : (m, 2) converged bubble amplitudes (b0 where the bubble did not converge)
     """
-    x_el = _as(x_el, (6, 3), "x_el")
+    b0 = np.zeros((len(x_el), 2)) if b0 is None else b0
+    x_el, fr_el, e_ref, to_cart, weights, b0 = _element_arrays(x_el, fr_el, e_ref, to_cart,
+                                                               weights=(weights, (N_GAUSS,)), b0=(b0, (2,)))
     m = x_el.shape[0]
-    fr_el = _as(fr_el, (6, 3, 3), "fr_el")
-    e_ref = _as(e_ref, (N_EVAL, 8), "e_ref")
-    to_cart = _as(to_cart, (N_GAUSS, 8, 8), "to_cart")
-    weights = _as(weights, (N_GAUSS,), "weights")
-    b0 = np.zeros((m, 2)) if b0 is None else _as(b0, (2,), "b0")
-    if not (len(fr_el) == len(e_ref) == len(to_cart) == len(weights) == len(b0) == m):
-        raise ValueError("all element arrays must have the same number of elements")
     C = np.ascontiguousarray(C, dtype=np.float64)
     if C.shape != (8, 8):
         raise ValueError(f"C must be (8, 8), got {C.shape}")

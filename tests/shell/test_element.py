@@ -79,3 +79,14 @@ def test_numba_mixed_iteration_matches_reference(geometry, tying):
     assert np.abs(fs1 - fs0).max() <= 1e-12 * np.abs(fs0).max()
     assert np.abs(K1 - K0).max() <= 1e-12 * np.abs(K0).max()
     assert np.abs(K1 - K_own).max() > 1e-6 * scale_K and np.abs(fs1 - f_own).max() > 1e-6 * np.abs(f_own).max()
+
+
+def test_mixed_iteration_inputs_are_checked():
+    mesh = generators.strip(1.0, 0.6, 2, 1)
+    for kernel in ("numba", "reference"):
+        body = ShellBody(mesh, ShellMaterial(2.0e5, 0.3, 0.02), kernel=kernel)
+        state = body.initial_state()
+        with pytest.raises(ValueError, match=r"stress must have shape \(4, 7, 8\)"):
+            body.mixed_element_forces(state, np.zeros((4, 7)))
+        with pytest.raises(ValueError, match=r"dh_el must have shape \(4, 36\)"):
+            body.stresses(state, np.zeros((4, 30)))
