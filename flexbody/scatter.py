@@ -14,8 +14,10 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from flexbody.kernel_cache import CACHE
 
-@numba.njit(cache=True, nogil=True)
+
+@numba.njit(cache=CACHE, nogil=True)
 def scatter_blocks(K: np.ndarray, S: np.ndarray, C: np.ndarray, slots: np.ndarray, scale: float,
                    out: np.ndarray) -> None:
     """out[slots] += scale * (S K C) per block.

@@ -9,7 +9,8 @@ for the conventions), written out entry by entry with the identities::
 Inputs may be arrays or tuples of floats. Unless stated otherwise an output must not alias an input.
 
 The Taylor coefficients are taken from ``so3.SERIES`` and frozen into the compiled code; numba's cache
-keys on this file only, so clear ``__pycache__`` after changing the series in ``so3.py``.
+keys on this file only, so clear the cache (``flexbody.kernel_cache.CACHE_DIR``) after changing the series in
+``so3.py``.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import math
 
 import numba
 
+from flexbody.kernel_cache import CACHE
 from flexbody.lie.so3 import SERIES, SERIES_SWITCH
 
 _SWITCH = SERIES_SWITCH
@@ -25,7 +27,7 @@ _A1, _A2, _A3, _A4 = SERIES["a1"], SERIES["a2"], SERIES["a3"], SERIES["a4"]
 _C2, _C3, _C4 = SERIES["c2"], SERIES["c3"], SERIES["c4"]
 _E2, _E3 = SERIES["e2"], SERIES["e3"]
 
-jit = numba.njit(cache=True, fastmath=False)
+jit = numba.njit(cache=CACHE, fastmath=False)
 
 
 # ----------------------------------------------------------------------------------------------------------

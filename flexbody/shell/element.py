@@ -61,6 +61,7 @@ import numba.extending
 import numpy as np
 from numba import prange
 
+from flexbody.kernel_cache import CACHE
 from flexbody.lie import kernels as lk
 from flexbody.lie.so3 import SERIES, SERIES_SWITCH
 from flexbody.shell.geometry import EVAL_DN, EVAL_N, GAUSS_OFFSET, N_GAUSS
@@ -72,7 +73,7 @@ NDOF = 36
 # The kernels below never allocate: they are compiled without reference counting where numba allows it
 # (``_nrt=False``; otherwise every array argument costs an atomic incref/decref per call). FMA contraction
 # is allowed (results agree with the numpy reference to round-off).
-_FLAGS = dict(cache=True, error_model="numpy", fastmath={"contract"})
+_FLAGS = dict(cache=CACHE, error_model="numpy", fastmath={"contract"})
 if hasattr(numba.core.cpu.CPUTargetOptions, "_nrt"):
     _FLAGS["_nrt"] = False
 # No two array arguments of a kernel overlap (workspaces are distinct arrays, inputs are only read): their data
@@ -1748,7 +1749,7 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
         _finish_tangent(e, Kz, Kiso, fr, Ti, fv, fz, dn, ninv, K1, T0, K, t0, t1)
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=CACHE, parallel=True)
 def _batch(x_el, fr_el, e_ref, to_cart, weights, C, cblk,
            used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
            pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
@@ -1920,7 +1921,7 @@ def _chunk_strains(e0, e1, x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a
             _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, deps)
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=CACHE, parallel=True)
 def _batch_strains(x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, n_chunks, out,
                    with_increment, dh, deps):
     m = x_el.shape[0]

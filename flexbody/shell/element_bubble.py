@@ -54,6 +54,7 @@ import numba
 import numpy as np
 from numba import prange
 
+from flexbody.kernel_cache import CACHE
 from flexbody.lie import kernels as lk
 from flexbody.lie.so3 import SERIES, SERIES_SWITCH
 from flexbody.shell.bubble import BUBBLE_MAX_ITERATIONS, BUBBLE_TOL, bubble_step
@@ -65,7 +66,7 @@ NDOF = 36
 NAUG = NDOF + 2
 N_EVAL = EVAL_N.shape[0]
 
-jit = numba.njit(cache=True)
+jit = numba.njit(cache=CACHE)
 # The per-element kernels (they allocate nothing): the flags of the MITC6 kernel (flexbody.shell.element: no
 # reference counting, noalias array arguments, numpy error model, FMA contraction).
 fast = numba.njit(**_FLAGS)
@@ -954,7 +955,7 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, a_ptr, a_i, a_p, a_j
             f[e, c] = fa[c]
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=CACHE, parallel=True)
 def _batch(x_el, fr_el, e_ref, to_cart, weights, C, a_ptr, a_i, a_p, a_j, a_v, used,
            EN, EDN, ENB, EDNB, b0, want_tangent, c_sym, tol, max_iter, n_chunks, f, K, b_out):
     m = x_el.shape[0]
