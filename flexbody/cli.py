@@ -136,19 +136,39 @@ def _strict_json(value):
     return value
 
 
-def _progress_printer(quiet: bool, prefix: str = ""):
-    """A per-step progress printer on stderr (None with --quiet)."""
-    if quiet:
-        return None
-    t0 = time.perf_counter()
+class _Progress:
+    """Progress on stderr: the kernels' compilation notices (:meth:`notify`) and a line per step (call); the
+    steps' clock starts when the kernels are ready."""
 
-    def progress(rec):
+    def __init__(self, prefix: str = "") -> None:
+        self.prefix = prefix
+        self.t0 = time.perf_counter()
+
+    def notify(self, notice) -> None:
+        """Show a :class:`flexbody.scenes.scene.CompileNotice`; restart the clock once the kernels are ready."""
+        print(f"{self.prefix}{notice}", file=sys.stderr, flush=True)
+        if notice.done:
+            self.t0 = time.perf_counter()
+
+    def __call__(self, rec) -> None:
         if hasattr(rec, "time"):   # a dynamic step record
             where = f"time {rec.time:10.5g} s  iterations {rec.iterations:2d}  energy {rec.total_energy:11.5g}"
         else:
             where = f"load factor {rec.load_factor:8.4f}  iterations {rec.iterations:2d}"
-        print(f"{prefix}  step {rec.step:4d}  {where}  {time.perf_counter() - t0:7.2f} s", file=sys.stderr, flush=True)
-    return progress
+        print(f"{self.prefix}  step {rec.step:4d}  {where}  {time.perf_counter() - self.t0:7.2f} s",
+              file=sys.stderr, flush=True)
+
+
+def _progress_printer(quiet: bool, prefix: str = "") -> _Progress | None:
+    """The progress printer on stderr (None with --quiet)."""
+    return None if quiet else _Progress(prefix)
+
+
+def _run_scene(scene, on_step=None, quiet: bool = False, prefix: str = "", started: float | None = None):
+    """``run_scene`` with the progress and compilation notices on stderr (none with ``quiet``)."""
+    from flexbody.scenes.scene import run_scene
+    progress = _progress_printer(quiet, prefix)
+    return run_scene(scene, on_step=on_step, progress=progress, notify=progress and progress.notify, started=started)
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -197,7 +217,8 @@ def summary_lines(summary) -> list[str]:
         f"Newton           {d['newton_iterations']} iterations, {d['tangent_updates']} tangent updates, "
         f"{d['factorizations']} factorizations" + (f" ({d['newton_iteration']} iteration)"
                                                    if "newton_iteration" in d else ""),
-        f"wall time        {d['wall_time_s']:.2f} s",
+        f"wall time        set-up {d['setup_time_s']:.2f} s, compilation {d['compile_time_s']:.2f} s "
+        f"(or loading from the cache), solve {d['solve_time_s']:.2f} s",
     ]
     for k, v in d["outputs"].items():
         lines.append(f"output           {k} = {v:.6g}")
@@ -222,7 +243,6 @@ def _run_failure(exc: BaseException) -> str:
 def cmd_run(args) -> int:
     """``flexbody run``: check the output paths, build the scene, run it with the requested files written
     step by step, print the summary. Returns 0, 2 (not converged), 1 (an error inside the analysis) or 130."""
-    from flexbody.scenes.scene import run_scene
     t0 = time.perf_counter()
     params = _parse_sets(args.set or [])
     _check_outputs({"--json": args.json, "--h5": args.h5, "--rerun": args.rerun})
@@ -239,7 +259,7 @@ def cmd_run(args) -> int:
     failure = None
     with recorder:
         try:
-            summary = run_scene(scene, on_step=recorder.on_step, progress=_progress_printer(args.quiet))
+            summary = _run_scene(scene, recorder.on_step, args.quiet, started=t0)
         except KeyboardInterrupt:
             failure, code = "interrupted", 130
         except (ValueError, ArithmeticError, RuntimeError, OSError) as exc:
@@ -282,7 +302,6 @@ def _mesh_sequence(source, refine: list[dict], scene=None) -> list[dict]:
 
 def _bench_one(source, params: dict, label: str, quiet: bool):
     from flexbody.outputs.report import BenchRun
-    from flexbody.scenes.scene import run_scene
     from flexbody.scenes.sources import SceneError
     try:
         scene = source.build(params)
@@ -294,7 +313,7 @@ def _bench_one(source, params: dict, label: str, quiet: bool):
         if scene.kind == "dynamic":                              # and the strain-energy kernel
             from flexbody.dynamics import DynamicModel
             DynamicModel(model).strain_energy(model.initial_state())
-        summary = run_scene(scene, progress=_progress_printer(quiet, f"  [{label}]") if not quiet else None)
+        summary = _run_scene(scene, quiet=quiet, prefix=f"  [{label}]")
     except (ValueError, ArithmeticError, RuntimeError) as exc:
         return BenchRun(scene.name, label, params, failure=f"the analysis failed: {_run_failure(exc)}")
     reference = None

@@ -26,7 +26,8 @@ from typing import Callable
 
 import numpy as np
 
-from flexbody.scenes.scene import DynamicAnalysis, Reference, Scene, kernel_threads
+from flexbody.scenes.scene import (CompileNotice, DynamicAnalysis, Reference, Scene, kernel_threads, timings,
+                                   warm_up_kernels)
 
 ENERGY_KEYS = ("kinetic", "strain", "gravity", "total")
 
@@ -156,6 +157,8 @@ class DynamicRunSummary:
     total_mass: float
     isolated: bool
     conservative: bool
+    setup_time_s: float = 0.0               # building the scene (if the caller timed it), the mass, ...
+    compile_time_s: float = 0.0             # compiling the kernels, or loading them from numba's cache
 
     @property
     def max_rel_error(self) -> float:
@@ -205,6 +208,7 @@ class DynamicRunSummary:
             "errors": self.errors, "max_rel_error": self.max_rel_error,
             "energy": self.energy_summary(), "momentum": self.momentum_summary(),
             "energy_history": {k: list(map(float, self.energies[k])) for k in ("time", *ENERGY_KEYS)},
+            **timings(self),
         }
 
 
@@ -226,12 +230,16 @@ def _output_value(out, model, dyn, state, velocity: np.ndarray) -> float:
     return out.value(model, state)
 
 
-def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callable | None = None) -> DynamicRunSummary:
+def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callable | None = None,
+                notify: Callable[[CompileNotice], None] | None = None,
+                started: float | None = None) -> DynamicRunSummary:
     """Integrate a dynamic scene; record outputs, energies and momenta; compare with the reference.
 
     ``on_step(record, state, history)`` is called for the initial state (record step 0, time 0) and for
-    every recorded step; ``progress(record)`` for every recorded step.
+    every recorded step; ``progress(record)`` for every recorded step; ``notify`` and ``started`` as in
+    :func:`flexbody.scenes.scene.run_scene`.
     """
+    started = time.perf_counter() if started is None else started
     from flexbody.dynamics import DynamicModel
     from integrators.generalized_alpha import DynamicStepRecord, generalized_alpha
 
@@ -259,7 +267,8 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
             progress(rec)
 
     with kernel_threads(a.threads, model.body.mesh.n_elements):
-        model.warm_up()  # numba compilation is not run time
+        setup = time.perf_counter() - started
+        compile_time = warm_up_kernels(model, notify)  # numba compilation is not run time
         t0 = time.perf_counter()
         p, L = dyn.momenta(state, v0)
         first = DynamicStepRecord(0, 0.0, 0, [], [], 0, 1, dyn.kinetic_energy(v0), dyn.strain_energy(state),
@@ -270,4 +279,5 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
         wall = time.perf_counter() - t0
     errors = compare_in_time(history, scene.reference) if scene.reference else []
     return DynamicRunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, a, history, energies,
-                             errors, wall, dyn.inertia.total_mass, _is_isolated(scene), _is_conservative(scene))
+                             errors, wall, dyn.inertia.total_mass, _is_isolated(scene), _is_conservative(scene),
+                             setup, compile_time)

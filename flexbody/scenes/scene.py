@@ -217,7 +217,9 @@ class RunSummary:
     result: StaticResult
     history: dict[str, list[float]]          # load_factor and every output, per converged step
     errors: list[dict]
-    wall_time_s: float
+    wall_time_s: float                       # the solve (after set-up and compilation)
+    setup_time_s: float = 0.0                # building the scene (if the caller timed it) and the run's set-up
+    compile_time_s: float = 0.0              # compiling the kernels, or loading them from numba's cache
 
     @property
     def max_rel_error(self) -> float:
@@ -233,7 +235,67 @@ class RunSummary:
             "message": self.result.message, "load_factor": self.result.load_factor,
             "outputs": {k: v[-1] for k, v in self.history.items() if k != "load_factor" and v},
             "errors": self.errors, "max_rel_error": self.max_rel_error,
+            **timings(self),
         }
+
+
+def timings(summary) -> dict[str, float]:
+    """The set-up, compilation and solve times of a run summary (``solve_time_s`` is its ``wall_time_s``)."""
+    return {"setup_time_s": summary.setup_time_s, "compile_time_s": summary.compile_time_s,
+            "solve_time_s": summary.wall_time_s}
+
+
+@dataclass(frozen=True)
+class CompileNotice:
+    """What :func:`warm_up_kernels` tells its caller, as it happens.
+
+    ``stage``: "compiling" (numba started compiling: nothing usable in its cache, the first run), then
+    "compiled" or "loaded" (every kernel came from numba's cache) when the kernels are ready, after
+    ``seconds``. ``str()`` gives the sentence to show a user.
+    """
+
+    stage: str
+    seconds: float = 0.0
+
+    @property
+    def done(self) -> bool:
+        return self.stage != "compiling"
+
+    def __str__(self) -> str:
+        if self.stage == "compiling":
+            return "compiling the element kernels (first run only, a few minutes) ..."
+        if self.stage == "compiled":
+            return f"compiled the element kernels in {self.seconds:.1f} s (cached for later runs)"
+        return f"loaded the compiled element kernels from the cache in {self.seconds:.2f} s"
+
+
+def warm_up_kernels(model: Model, notify: Callable[[CompileNotice], None] | None = None) -> float:
+    """Compile, or load from numba's cache, the kernels of a run (:meth:`Model.warm_up`); return the seconds.
+
+    ``notify`` gets a "compiling" :class:`CompileNotice` when numba starts compiling (a cache miss), and
+    a "compiled" or "loaded" one when the kernels are ready.
+    """
+    from numba.core import event
+
+    class Watch(event.Listener):
+        compilations = 0
+
+        def on_start(self, ev) -> None:
+            self.compilations += 1
+            if self.compilations == 1 and notify is not None:
+                notify(CompileNotice("compiling"))
+
+        def on_end(self, ev) -> None:
+            pass
+
+    watch = Watch()
+    t0 = time.perf_counter()
+    with event.install_listener("numba:compile", watch):
+        model.warm_up()
+    seconds = time.perf_counter() - t0
+    if notify is not None:
+        notify(CompileNotice("compiled" if watch.compilations else "loaded", seconds))
+    return seconds
 
 
 @contextmanager
@@ -280,7 +342,8 @@ def compare_with_reference(history: dict[str, list[float]], reference: Reference
     return errors
 
 
-def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable | None = None):
+def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable | None = None,
+              notify: Callable[[CompileNotice], None] | None = None, started: float | None = None):
     """Run a scene; track the outputs at every converged (static) or recorded (dynamic) step; compare
     with the reference.
 
@@ -293,14 +356,18 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
     on_step : called as ``on_step(record, state, history)`` after every step (HDF5 and rerun writers);
         a dynamic run calls it for the initial state (record step 0) too
     progress : called as ``progress(record)`` after every step
+    notify : told when the kernels' compilation starts and ends (:func:`warm_up_kernels`)
+    started : the ``time.perf_counter()`` reading when the set-up began (e.g. before building the scene);
+        default: the call
 
     Returns
     -------
     RunSummary for a static scene, :class:`flexbody.scenes.dynamic_run.DynamicRunSummary` for a dynamic one.
     """
+    started = time.perf_counter() if started is None else started
     if isinstance(scene.analysis, DynamicAnalysis):
         from flexbody.scenes.dynamic_run import run_dynamic
-        return run_dynamic(scene, on_step, progress)
+        return run_dynamic(scene, on_step, progress, notify, started)
     model = scene.model
     history: dict[str, list[float]] = {"load_factor": []}
     for out in scene.outputs:
@@ -315,7 +382,8 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
         if progress is not None:
             progress(rec)
 
-    model.warm_up()  # numba compilation is not run time
+    setup = time.perf_counter() - started
+    compile_time = warm_up_kernels(model, notify)  # numba compilation is not run time
     t0 = time.perf_counter()
     a = scene.analysis
     if a.method not in ("load_control", "arc_length"):
@@ -328,4 +396,5 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
                                 max_load_increment=a.max_load_increment, settings=a.newton, on_step=record)
     wall = time.perf_counter() - t0
     errors = compare_with_reference(history, scene.reference) if scene.reference else []
-    return RunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, history, errors, wall)
+    return RunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, history, errors, wall,
+                      setup, compile_time)
