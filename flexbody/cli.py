@@ -168,7 +168,8 @@ def _run_scene(scene, on_step=None, quiet: bool = False, prefix: str = "", start
     """``run_scene`` with the progress and compilation notices on stderr (none with ``quiet``)."""
     from flexbody.scenes.scene import run_scene
     progress = _progress_printer(quiet, prefix)
-    return run_scene(scene, on_step=on_step, progress=progress, notify=progress and progress.notify, started=started)
+    notify = None if progress is None else progress.notify
+    return run_scene(scene, on_step=on_step, progress=progress, notify=notify, started=started)
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -308,12 +309,7 @@ def _bench_one(source, params: dict, label: str, quiet: bool):
     except SceneError as exc:
         return BenchRun(source.name, label, params, failure=str(exc))
     try:
-        model = scene.model
-        model.residual_and_tangent(model.initial_state(), 0.0)  # compile the kernels outside the timed run
-        if scene.kind == "dynamic":                              # and the strain-energy kernel
-            from flexbody.dynamics import DynamicModel
-            DynamicModel(model).strain_energy(model.initial_state())
-        summary = _run_scene(scene, quiet=quiet, prefix=f"  [{label}]")
+        summary = _run_scene(scene, quiet=quiet, prefix=f"  [{label}]")  # compiles outside the timed solve
     except (ValueError, ArithmeticError, RuntimeError) as exc:
         return BenchRun(scene.name, label, params, failure=f"the analysis failed: {_run_failure(exc)}")
     reference = None

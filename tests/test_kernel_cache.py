@@ -65,7 +65,7 @@ def test_cache_without_xdg_goes_under_home(tmp_path):
 
 def test_cache_location_set_when_numba_was_imported_first(tmp_path):
     used = _run(tmp_path, "import numba\n" + SCATTER_ONCE)
-    assert _index_files(tmp_path / "xdg" / "flexbody" / "numba") and Path(used) == tmp_path / "xdg" / "flexbody" / "numba"
+    assert Path(used) == tmp_path / "xdg" / "flexbody" / "numba" and _index_files(Path(used))
 
 
 def test_numba_cache_dir_is_honoured(tmp_path):

@@ -266,7 +266,7 @@ class CompileNotice:
             return "compiling the element kernels (first run only, a few minutes) ..."
         if self.stage == "compiled":
             return f"compiled the element kernels in {self.seconds:.1f} s (cached for later runs)"
-        return f"loaded the compiled element kernels from the cache in {self.seconds:.2f} s"
+        return f"loaded the compiled element kernels in {self.seconds:.2f} s (from the cache: no compilation)"
 
 
 def warm_up_kernels(model: Model, notify: Callable[[CompileNotice], None] | None = None) -> float:
