@@ -146,7 +146,7 @@ class _Progress:
 
     def notify(self, notice) -> None:
         """Show a :class:`flexbody.scenes.scene.CompileNotice`; restart the clock once the kernels are ready."""
-        print(f"{self.prefix}{notice}", file=sys.stderr, flush=True)
+        print(f"{self.prefix}  {notice}", file=sys.stderr, flush=True)
         if notice.done:
             self.t0 = time.perf_counter()
 
