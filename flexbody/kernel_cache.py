@@ -17,8 +17,8 @@ uncached (compiled in every process) instead of failing. ``CACHE_DIR`` holds the
 ``CACHE`` the ``cache=`` flag for ``numba.njit``.
 
 Importing this module is the only place flexbody sets process-wide numba state; ``flexbody/__init__.py``
-imports it first. A user's own ``cache=True`` functions follow ``NUMBA_CACHE_DIR`` too while flexbody is
-imported (numba has a single cache location per process).
+imports it first. A user's own ``cache=True`` functions decorated after ``import flexbody`` are cached there
+too (numba has one cache location per process).
 """
 
 from __future__ import annotations
