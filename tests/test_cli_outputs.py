@@ -185,6 +185,24 @@ def test_a_signal_stops_the_run_cleanly_and_both_files_agree(tmp_path, signum, c
     assert chunks["/body/mesh"]["steps"] == n and chunks["/outputs/u_r_corner"]["steps"] == n
 
 
+def test_a_signal_between_output_steps_still_writes_the_last_converged_state(tmp_path):
+    """output_every beyond the run: only step 0 is on the output grid. Before: a stopped run kept step 0 only."""
+    h5 = tmp_path / "every.h5"
+    proc = start_cli(["run", *ENDLESS, "--set", "output_every=10000000", "--quiet", "--h5", str(h5)], tmp_path)
+    try:
+        wait_for_steps(proc, h5, 1)
+        time.sleep(3.0)  # some steps, none of them on the output grid
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 143, err
+    d = read_hdf5(h5)
+    assert len(d["step"]) == 2 and d["step"][0] == 0 and d["step"][1] > 0
+    assert d["time"][1] == pytest.approx(1e-3 * d["step"][1], rel=1e-9)
+    assert err == f"flexbody: stopped by SIGTERM; 2 step(s) written to {h5}\n"
+
+
 # ----------------------------------------------------------------------------------------------------------
 # a dynamic run with output_every > 1 that stops early
 # ----------------------------------------------------------------------------------------------------------
