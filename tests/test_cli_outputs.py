@@ -152,6 +152,23 @@ def test_an_output_naming_the_python_scene_file_is_refused(tmp_path):
     assert scene.read_text() == text
 
 
+def test_an_output_naming_the_mesh_file_of_a_toml_scene_is_refused(tmp_path, monkeypatch):
+    pytest.importorskip("meshio")
+    from flexbody.mesh import generators
+    from flexbody.mesh.io import write_mesh
+    from tests.scenes.test_toml_scene import PLATE
+    monkeypatch.chdir(tmp_path)
+    write_mesh(generators.strip(2.0, 1.0, 2, 1), tmp_path / "strip.vtu")
+    (tmp_path / "plate.toml").write_text(
+        PLATE.replace('generator = "strip"\nlength = 2.0\nwidth = 1.0\nnx = 2\nny = 2', 'file = "strip.vtu"')
+        .replace('set = "clamped"', 'plane = { point = [0, 0, 0], normal = [1, 0, 0] }'))
+    mesh = (tmp_path / "strip.vtu").read_bytes()
+    with pytest.raises(SystemExit) as exc:
+        main(["run", "plate.toml", "--quiet", "--h5", "strip.vtu"])
+    assert str(exc.value).startswith("flexbody: --h5 'strip.vtu' is the mesh file ")
+    assert (tmp_path / "strip.vtu").read_bytes() == mesh
+
+
 @pytest.mark.parametrize("option", ["--h5", "--rerun"])
 def test_an_output_that_is_not_a_regular_file_is_refused(option):
     """Before: --h5 /dev/null ended in a traceback from h5py."""
