@@ -7,15 +7,21 @@
 
 SCENE is a built-in scene name (``flexbody list``) or a path to a ``.toml`` or ``.py`` scene file
 (docs/scenes.md). Bad input ends with one line on stderr naming the offending key or value (exit code 1);
-a run that stops before its last load step writes its outputs and exits with 2.
+a run that stops before its last load step writes its outputs and exits with 2 (also when the --h5 file
+cannot take another step, e.g. a full disk); an error inside the analysis exits with 1. Ctrl-C (SIGINT)
+and SIGTERM (what ``timeout`` and batch schedulers send) stop a run cleanly: the step being written is
+finished, the files are closed readable, and the exit code is 128 + the signal number (130, 143).
 """
 
 from __future__ import annotations
 
 import argparse
 import ast
+from contextlib import contextmanager
 import json
 import math
+import os
+import signal
 import sys
 import time
 
@@ -90,15 +96,31 @@ def _parse_refine(items: list[str]) -> list[dict]:
     return [{k: v[i] for k, v in columns.items()} for i in range(n)]
 
 
-def _check_outputs(paths: dict[str, str | None]) -> None:
-    from flexbody.outputs.recording import OutputPathError, check_distinct, check_output_path
+def _check_outputs(paths: dict[str, str | None], inputs: dict[str, str] | None = None) -> None:
+    """One line if an output cannot be written, two name one file, or one names an ``inputs`` file."""
+    from flexbody.outputs.recording import OutputPathError, check_distinct, check_not_inputs, check_output_path
     try:
         for option, path in paths.items():
             if path is not None:
-                check_output_path(path, option)
+                check_output_path(path, option, regular=option != "--json")
         check_distinct(paths)
+        check_not_inputs(paths, inputs or {})
     except OutputPathError as exc:
         raise CliError(str(exc)) from None
+
+
+def _input_files(source, scene=None) -> dict[str, str]:
+    """The files a scene reads: its scene file, and a TOML scene's mesh and reference files."""
+    if source.kind == "builtin":
+        return {}
+    files = {"scene file": source.name}
+    if scene is not None and source.kind == "toml":
+        folder = os.path.dirname(os.path.abspath(source.name))
+        for key, what in (("mesh.file", "mesh file"), ("reference.file", "reference file")):
+            value = scene.parameters.get(key)
+            if isinstance(value, str):
+                files[what] = os.path.join(folder, value)
+    return files
 
 
 def _open(name: str):
@@ -241,28 +263,91 @@ def _run_failure(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
+class Stopped(KeyboardInterrupt):
+    """SIGINT or SIGTERM arrived: the run stops (exit code 128 + ``signum``)."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+class _StopSignals:
+    """SIGINT and SIGTERM raise :class:`Stopped`, except inside :meth:`deferred`, which finishes its block first
+    (a step being written to the output files is written whole, to every file, before the run stops)."""
+
+    def __init__(self) -> None:
+        self.pending: int | None = None
+        self._deferring = False
+
+    def handle(self, signum: int, frame) -> None:
+        if self._deferring:
+            self.pending = signum
+        else:
+            raise Stopped(signum)
+
+    @contextmanager
+    def deferred(self):
+        self._deferring = True
+        try:
+            yield
+        finally:
+            self._deferring = False
+        if self.pending is not None:
+            raise Stopped(self.pending)
+
+    @contextmanager
+    def installed(self):
+        """Install the handlers for the block (in the main thread only; elsewhere signals stay as they are)."""
+        previous = {}
+        try:
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                previous[signum] = signal.signal(signum, self.handle)
+        except ValueError:  # not the main thread
+            pass
+        try:
+            yield self
+        finally:
+            for signum, handler in previous.items():
+                signal.signal(signum, handler)
+
+
 def cmd_run(args) -> int:
     """``flexbody run``: check the output paths, build the scene, run it with the requested files written
-    step by step, print the summary. Returns 0, 2 (not converged), 1 (an error inside the analysis) or 130."""
+    step by step, print the summary. Returns 0, 2 (not converged, or stopped because the --h5 file cannot
+    take a step), 1 (an error inside the analysis) or 128 + the signal number (SIGINT, SIGTERM)."""
     t0 = time.perf_counter()
     params = _parse_sets(args.set or [])
-    _check_outputs({"--json": args.json, "--h5": args.h5, "--rerun": args.rerun})
+    outputs = {"--json": args.json, "--h5": args.h5, "--rerun": args.rerun}
+    source = _open(args.scene)
+    _check_outputs(outputs, _input_files(source))
     if args.rerun:
         import importlib.util
         if importlib.util.find_spec("rerun") is None:  # looked up, not imported
             raise CliError("--rerun needs the rerun SDK: pip install 'flexbody[rerun]' (or rerun-sdk)")
-    scene = _build(_open(args.scene), params)
-    from flexbody.outputs.recording import RunRecorder
+    scene = _build(source, params)
+    _check_outputs(outputs, _input_files(source, scene))
+    from flexbody.outputs.recording import OutputStopped, RunRecorder
     try:
-        recorder = RunRecorder(scene, h5=args.h5, rerun=args.rerun, directors=args.directors)
+        recorder = RunRecorder(scene, h5=args.h5, rerun=args.rerun, directors=args.directors,
+                               warn=lambda message: print(f"flexbody: warning: {message}", file=sys.stderr))
     except (OSError, ImportError, ValueError) as exc:
         raise CliError(str(exc).splitlines()[0]) from None
     failure = None
-    with recorder:
+    signals = _StopSignals()
+
+    def on_step(rec, state, history) -> None:
+        with signals.deferred():
+            recorder.on_step(rec, state, history)
+
+    with recorder, signals.installed():
         try:
-            summary = _run_scene(scene, recorder.on_step, args.quiet, started=t0)
+            summary = _run_scene(scene, on_step, args.quiet, started=t0)
+        except Stopped as exc:
+            failure, code = f"stopped by {signal.Signals(exc.signum).name}", 128 + exc.signum
         except KeyboardInterrupt:
             failure, code = "interrupted", 130
+        except OutputStopped as exc:
+            failure, code = f"the run stopped: {exc}", 2
         except (ValueError, ArithmeticError, RuntimeError, OSError) as exc:
             failure, code = f"the analysis failed: {_run_failure(exc)}", 1
     if failure is not None:

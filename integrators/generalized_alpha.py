@@ -346,7 +346,8 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
     ----------
     dyn : the dynamic model (:class:`flexbody.dynamics.DynamicModel`)
     state, velocity : initial configuration (default: the reference) and free-DoF velocity (default: 0)
-    on_step : called as on_step(record, state, v) after every recorded step
+    on_step : called as on_step(record, state, v) after every recorded step, and for the last converged
+        step when a ``KeyboardInterrupt`` stops the run between two recorded steps (then re-raised)
     record_every : keep every k-th step record (energy and momenta are evaluated only for kept steps)
 
     The initial acceleration is consistent (vdot_0 = -M^-1 g(q_0, t_0), a_0 = vdot_0), which the second
@@ -369,18 +370,24 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
     t0 = time.perf_counter()
     initial = _record(dyn, 0, t_start, q, v, 0, [], [], 0, 1, t0)
     records: list[DynamicStepRecord] = []
-    t = t_start
-    for n in range(n_steps):
-        try:
-            q, v, vdot, a, its, res, cor, ref, sub = stepper.advance(q, v, vdot, a, t)
-        except _StepFailure as exc:
-            return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, False,
-                                 f"step {n + 1} from t = {t:.6g} failed: {exc}", time.perf_counter() - t0)
-        t = t_start + (n + 1) * h
-        if (n + 1) % record_every == 0 or n + 1 == n_steps:
-            rec = _record(dyn, n + 1, t, q, v, its, res, cor, ref, sub, t0)
-            records.append(rec)
-            if on_step is not None:
-                on_step(rec, q, v)
+    t, done, last = t_start, 0, 0  # (q, v) after `done` steps at t; `last`: the last step given to on_step
+    try:
+        for n in range(n_steps):
+            try:
+                q, v, vdot, a, its, res, cor, ref, sub = stepper.advance(q, v, vdot, a, t)
+            except _StepFailure as exc:
+                return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, False,
+                                     f"step {n + 1} from t = {t:.6g} failed: {exc}", time.perf_counter() - t0)
+            t, done = t_start + (n + 1) * h, n + 1  # no call since advance(): an interrupt cannot fall between
+            if (n + 1) % record_every == 0 or n + 1 == n_steps:
+                rec = _record(dyn, n + 1, t, q, v, its, res, cor, ref, sub, t0)
+                records.append(rec)
+                last = n + 1
+                if on_step is not None:
+                    on_step(rec, q, v)
+    except KeyboardInterrupt:  # Ctrl-C / a stop request: hand the last converged step over, then stop
+        if on_step is not None and done > last:
+            on_step(_record(dyn, done, t, q, v, 0, [], [], 0, 1, t0), q, v)
+        raise
     return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, True, "completed",
                          time.perf_counter() - t0)

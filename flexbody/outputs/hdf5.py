@@ -25,17 +25,26 @@ satisfies ``R = (w^2 - v.v) I + 2 v v^T + 2 w hat(v)`` with ``v = (x, y, z)``, i
 by the angle ``2 atan2(|v|, w)`` about ``v`` (active, Hamilton convention, scalar first).
 
 Crash safety: the file is created with ``libver="latest"`` and switched to SWMR (single writer, multiple
-readers) mode once its datasets exist; every step is flushed. A reader may open it while the run is going
-or after a crash with ``h5py.File(path, "r", swmr=True)`` (what :func:`read_hdf5` does). Within a step the
-data sets are extended first and ``/steps/index`` last, so a step is complete once ``/steps/index`` has it;
-readers take the shortest ``/steps`` data set as the number of steps. Note: after a crash, tools that do
-not open in SWMR mode report "file is already open for write"; ``h5clear -s FILE`` clears that flag.
-A file closed normally opens with any HDF5 tool.
+readers) mode once its datasets exist. A step writes its values into every other ``/steps`` data set and
+flushes the file, then extends ``/steps/index`` (fill value -1) and flushes again: a step is complete once
+``/steps/index`` holds its (non-negative) number, and no interruption can leave a complete-looking row of
+zeros. Readers take the leading rows with ``index >= 0`` of the shortest ``/steps`` data set. A reader may
+open the file while the run is going or after a crash with ``h5py.File(path, "r", swmr=True)`` (what
+:func:`read_hdf5` does, with a bounded number of metadata read attempts, so that a damaged file fails with
+an error instead of being retried for hours). Note: after a crash, tools that do not open in SWMR mode
+report "file is already open for write"; ``h5clear -s FILE`` clears that flag. A file closed normally
+opens with any HDF5 tool.
+
+One writer: the writer holds a lock on the file (:mod:`flexbody.outputs.files`); a second writer is
+refused before it truncates anything. Disk space: a step that the file system cannot hold (with a margin)
+is refused before any of it is written (:class:`flexbody.outputs.files.DiskFullError`), so the file stays
+readable up to the last complete step.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+import ctypes
 import json
 import math
 import os
@@ -43,10 +52,17 @@ import os
 import h5py
 import numpy as np
 
+from flexbody.outputs.files import DiskFullError, check_free_space, lock_output, release
+
 FORMAT = "flexbody-hdf5"
 FORMAT_VERSION = 1
 DEFAULT_STATS = ("iterations", "residual", "wall_time")
 KINDS = {"static": "load_factor", "dynamic": "time"}
+#: rows per chunk of the one-dimensional ``/steps`` data sets
+SCALAR_CHUNK = 256
+#: metadata read attempts of :func:`read_hdf5` (HDF5's default for SWMR readers is 100, with waits that
+#: double from 1 ns: on a damaged file that is hours; 32 attempts wait about 4 s in all)
+READ_ATTEMPTS = 32
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -188,10 +204,16 @@ class Hdf5Writer:
             raise FileNotFoundError(f"cannot create HDF5 output {self.path!r}: directory {parent!r} does not exist")
         if os.path.isdir(self.path):
             raise IsADirectoryError(f"cannot create HDF5 output {self.path!r}: it is a directory")
-        try:
-            self._file = h5py.File(self.path, "w", libver="latest")
+        if os.path.exists(self.path) and not os.path.isfile(self.path):
+            raise OSError(f"cannot create HDF5 output {self.path!r}: it is not a regular file")
+        check_free_space(self.path, nodes.nbytes + directors.nbytes + 6 * elements.size * 8, "HDF5 output", 0)
+        self._lock = lock_output(self.path, "HDF5 output")
+        try:  # HDF5's own lock is off: it would clash with ours, and it drops it in SWMR mode anyway
+            self._file = h5py.File(self.path, "w", libver="latest", locking=False)
         except OSError as exc:
+            release(self._lock)
             raise OSError(f"cannot create HDF5 output {self.path!r}: {exc}") from None
+        self._failed = False
 
         from flexbody import __version__
         f = self._file
@@ -210,9 +232,9 @@ class Hdf5Writer:
             g.create_dataset("directors", data=directors)
             s = f.create_group("steps")
 
-            def series(group, name, dtype="f8", tail=()):
+            def series(group, name, dtype="f8", tail=(), fill=math.nan):
                 return group.create_dataset(name, shape=(0,) + tail, maxshape=(None,) + tail, dtype=dtype,
-                                            chunks=(1,) + tail if tail else (256,))
+                                            chunks=(1,) + tail if tail else (SCALAR_CHUNK,), fillvalue=fill)
 
             # order of extension within a step: data first, the index last
             self._data = [("x", series(s, "x", tail=(n, 3))), ("frames", series(s, "frames", tail=(n, 4)))]
@@ -220,11 +242,12 @@ class Hdf5Writer:
             self._tracked = {name: series(tg, name) for name in self.outputs}
             self._stats = {name: series(sg, name) for name in self.stats}
             self._param = series(s, KINDS[kind])
-            self._index = series(s, "index", dtype="i8")
+            self._index = series(s, "index", dtype="i8", fill=-1)
             f.swmr_mode = True
             f.flush()
         except BaseException:
             f.close()
+            release(self._lock)
             raise
 
     # -- context manager --------------------------------------------------------------------------------------
@@ -263,23 +286,58 @@ class Hdf5Writer:
         rows = [(self._data[0][1], x), (self._data[1][1], quaternions_from_matrices(frames))]
         rows += [(ds, float(tracked.get(name, math.nan))) for name, ds in self._tracked.items()]
         rows += [(ds, float(stats.get(name, math.nan))) for name, ds in self._stats.items()]
-        rows += [(self._param, float(load_factor_or_time)), (self._index, int(step))]
+        rows.append((self._param, float(load_factor_or_time)))
+        if int(step) < 0:
+            raise ValueError(f"step numbers must be >= 0, got {step!r}")
         k = self.n_steps
+        check_free_space(self.path, self._step_bytes(k), "HDF5 output", k)
+        try:
+            self._append(rows, k)
+            self._file.flush()  # the values on disk before the index says that the step is there
+            self._append([(self._index, int(step))], k)
+            self._file.flush()
+        except (OSError, RuntimeError) as exc:
+            self._failed = True
+            raise _write_error(exc, self.path, k) from None
+        self.n_steps = k + 1
+
+    @staticmethod
+    def _append(rows: list, k: int) -> None:
         for ds, value in rows:
             ds.resize(k + 1, axis=0)
             ds[k] = value
-        self.n_steps = k + 1
-        self._file.flush()
+
+    def _step_bytes(self, k: int) -> int:
+        """Bytes that step ``k`` adds to the file: positions and frames, and new chunks every SCALAR_CHUNK steps."""
+        scalars = len(self._tracked) + len(self._stats) + 2
+        return self.n_nodes * 7 * 8 + (scalars * SCALAR_CHUNK * 8 if k % SCALAR_CHUNK == 0 else 0)
 
     def flush(self) -> None:
-        if not self.closed:
+        if not self.closed and not self._failed:
             self._file.flush()
 
     def close(self) -> None:
-        """Flush and close the file (idempotent)."""
+        """Flush and close the file and give up its lock (idempotent). After a failed write the close is
+        best effort: what the failed step left is not counted by readers (``/steps/index`` comes last)."""
         if not self.closed:
-            self._file.flush()
-            self._file.close()
+            try:
+                if not self._failed:
+                    self._file.flush()
+                self._file.close()
+            except (OSError, RuntimeError):
+                if not self._failed:
+                    raise
+            finally:
+                release(self._lock)
+                self._lock = None
+
+
+def _write_error(exc: BaseException, path: str, steps: int) -> OSError:
+    """One-line OSError for an HDF5 write that failed (a full disk says so)."""
+    text = str(exc)
+    if "errno = 28" in text or "No space left" in text:
+        return DiskFullError(f"disk full after {steps} steps: HDF5 output {path!r} cannot take more")
+    return OSError(f"cannot write step {steps + 1} to HDF5 output {path!r}: {text.splitlines()[0]}")
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -296,28 +354,65 @@ def read_hdf5(path) -> dict:
     """
     path = os.fspath(path)
     try:
-        f = h5py.File(path, "r", swmr=True)
-    except OSError as exc:
-        raise OSError(f"cannot read HDF5 output {path!r}: {exc}") from None
-    with f:
-        if f.attrs.get("format") != FORMAT:
-            raise ValueError(f"{path!r} is not a {FORMAT} file (format attribute {f.attrs.get('format')!r})")
-        kind = str(f.attrs["kind"])
-        s = f["steps"]
-        series = {"x": s["x"], "frames": s["frames"], "param": s[KINDS[kind]], "index": s["index"]}
-        series.update({("tracked", k): v for k, v in s["tracked"].items()})
-        series.update({("stats", k): v for k, v in s["stats"].items()})
-        for ds in series.values():
-            ds.refresh()
-        k = min(ds.shape[0] for ds in series.values())
-        q = series["frames"][:k]
-        out = {
-            "scene": str(f.attrs["scene"]), "kind": kind, "flexbody_version": str(f.attrs["flexbody_version"]),
-            "parameters": json.loads(f.attrs["parameters"]),
-            "nodes": f["mesh/nodes"][()], "elements": f["mesh/elements"][()], "directors": f["mesh/directors"][()],
-            "step": series["index"][:k], KINDS[kind]: series["param"][:k],
-            "x": series["x"][:k], "quaternions": q, "frames": matrices_from_quaternions(q),
-            "tracked": {name: s["tracked"][name][:k] for name in json.loads(f.attrs["outputs"])},
-            "stats": {name: s["stats"][name][:k] for name in json.loads(f.attrs["stats"])},
-        }
+        f = _open_for_reading(path)
+    except (OSError, RuntimeError) as exc:
+        raise OSError(f"cannot read HDF5 output {path!r}: {str(exc).splitlines()[0]}") from None
+    try:
+        return _read_open_file(f, path)
+    except (OSError, RuntimeError) as exc:  # damaged metadata (after the bounded read attempts)
+        raise OSError(f"cannot read HDF5 output {path!r}: {str(exc).splitlines()[0]}") from None
+    finally:
+        f.close()
+
+
+def _set_read_attempts(fapl, attempts: int) -> bool:
+    """``H5Pset_metadata_read_attempts`` on a file access property list (h5py does not wrap it; it is
+    looked up through h5py's own extension module, so the call reaches the HDF5 library h5py uses)."""
+    try:
+        func = ctypes.CDLL(h5py.h5p.__file__).H5Pset_metadata_read_attempts
+    except (OSError, AttributeError):  # pragma: no cover - a platform where the symbol is not reachable
+        return False
+    func.argtypes, func.restype = [ctypes.c_int64, ctypes.c_uint], ctypes.c_int
+    return func(fapl.id, attempts) >= 0
+
+
+def _open_for_reading(path: str) -> h5py.File:
+    """The file opened read-only in SWMR mode, with at most :data:`READ_ATTEMPTS` metadata read attempts."""
+    fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
+    if not _set_read_attempts(fapl, READ_ATTEMPTS):  # pragma: no cover
+        return h5py.File(path, "r", swmr=True)
+    fid = h5py.h5f.open(os.fsencode(path), h5py.h5f.ACC_RDONLY | h5py.h5f.ACC_SWMR_READ, fapl=fapl)
+    return h5py.File(fid)
+
+
+def _complete_steps(series: dict) -> int:
+    """The number of complete steps: the leading rows of the shortest data set whose index is written."""
+    k = min(ds.shape[0] for ds in series.values())
+    index = series["index"][:k]
+    unwritten = np.flatnonzero(index < 0)
+    return int(unwritten[0]) if unwritten.size else k
+
+
+def _read_open_file(f: h5py.File, path: str) -> dict:
+    """The contents of an open flexbody HDF5 file (see :func:`read_hdf5`)."""
+    if f.attrs.get("format") != FORMAT:
+        raise ValueError(f"{path!r} is not a {FORMAT} file (format attribute {f.attrs.get('format')!r})")
+    kind = str(f.attrs["kind"])
+    s = f["steps"]
+    series = {"x": s["x"], "frames": s["frames"], "param": s[KINDS[kind]], "index": s["index"]}
+    series.update({("tracked", k): v for k, v in s["tracked"].items()})
+    series.update({("stats", k): v for k, v in s["stats"].items()})
+    for ds in series.values():
+        ds.refresh()
+    k = _complete_steps(series)
+    q = series["frames"][:k]
+    out = {
+        "scene": str(f.attrs["scene"]), "kind": kind, "flexbody_version": str(f.attrs["flexbody_version"]),
+        "parameters": json.loads(f.attrs["parameters"]),
+        "nodes": f["mesh/nodes"][()], "elements": f["mesh/elements"][()], "directors": f["mesh/directors"][()],
+        "step": series["index"][:k], KINDS[kind]: series["param"][:k],
+        "x": series["x"][:k], "quaternions": q, "frames": matrices_from_quaternions(q),
+        "tracked": {name: s["tracked"][name][:k] for name in json.loads(f.attrs["outputs"])},
+        "stats": {name: s["stats"][name][:k] for name in json.loads(f.attrs["stats"])},
+    }
     return out

@@ -3,25 +3,42 @@
 Each writer is imported only when its file is asked for: a run without ``--rerun`` never imports rerun.
 Every step is flushed to both files, and :meth:`RunRecorder.close` runs whatever ends the run (a finished
 or diverged analysis, an exception, Ctrl-C), so what was written stays readable.
+
+When a writer fails: the HDF5 file holds the results that were asked for, so a step it cannot take (a full
+disk, an I/O error) stops the run with :class:`OutputStopped` (the file keeps every complete step); the
+rerun recording is for looking only, so its failure is reported once through ``warn`` and the recording is
+closed where it stands, while the solve and the HDF5 file go on.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 import os
+import warnings
 
 
 class OutputPathError(ValueError):
     """An output file that cannot be written; the message is one line naming the option and the path."""
 
 
-def check_output_path(path: str, option: str) -> None:
-    """Raise :class:`OutputPathError` if ``path`` cannot be created as a file (checked before a run starts)."""
+class OutputStopped(Exception):
+    """The HDF5 output could not take a step: the run stops; the message is one line naming the file."""
+
+
+def check_output_path(path: str, option: str, regular: bool = True) -> None:
+    """Raise :class:`OutputPathError` if ``path`` cannot be created as a file (checked before a run starts).
+
+    ``regular``: the path must be (or become) a regular file; a device, pipe or socket (``/dev/null``) is
+    refused (an HDF5 file or a recording cannot be written there).
+    """
     if not path:
         raise OutputPathError(f"{option} needs a file name")
     full = os.path.abspath(path)
     parent = os.path.dirname(full)
     if os.path.isdir(full):
         raise OutputPathError(f"cannot write {option} file {path!r}: it is a directory")
+    if regular and os.path.exists(full) and not os.path.isfile(full):
+        raise OutputPathError(f"cannot write {option} file {path!r}: it is not a regular file")
     if not os.path.isdir(parent):
         raise OutputPathError(f"cannot write {option} file {path!r}: directory {parent!r} does not exist")
     if not os.access(parent, os.W_OK | os.X_OK):
@@ -40,6 +57,25 @@ def check_distinct(paths: dict[str, str | None]) -> None:
         if key in seen:
             raise OutputPathError(f"{seen[key]} and {option} name the same file {path!r}")
         seen[key] = option
+
+
+def _same_file(a: str, b: str) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist (yet)
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def check_not_inputs(outputs: dict[str, str | None], inputs: dict[str, str]) -> None:
+    """Raise :class:`OutputPathError` if an output option names an input file (the scene file, its mesh or
+    reference file): ``outputs`` {option: path}, ``inputs`` {what: path}. Hard and symbolic links count."""
+    for option, path in outputs.items():
+        if not path:
+            continue
+        for what, source in inputs.items():
+            if _same_file(path, source):
+                raise OutputPathError(f"{option} {path!r} is the {what} {source!r}; refusing to overwrite an "
+                                      "input (choose another output file)")
 
 
 #: the statistics a dynamic run adds to the HDF5 file, per step
@@ -68,6 +104,7 @@ class RunRecorder:
     h5 : path of the HDF5 results file, or None
     rerun : path of the rerun recording (.rrd), or None
     directors : also log the directors as arrows in the recording
+    warn : called with a one-line message when the recording fails and is closed (default: a warning)
 
     Use as a context manager; pass :meth:`on_step` to ``run_scene``.
 
@@ -76,8 +113,10 @@ class RunRecorder:
     the energies and momenta of every step (:data:`DYNAMIC_STATS`).
     """
 
-    def __init__(self, scene, h5: str | None = None, rerun: str | None = None, directors: bool = False):
+    def __init__(self, scene, h5: str | None = None, rerun: str | None = None, directors: bool = False,
+                 warn: Callable[[str], None] | None = None):
         self.scene = scene
+        self._warn = warn or (lambda message: warnings.warn(message, RuntimeWarning, stacklevel=3))
         self.kind = getattr(scene, "kind", "static")
         self.names = [o.name for o in scene.outputs]
         self.steps_written = 0
@@ -106,7 +145,8 @@ class RunRecorder:
         return [w.path for w in (self._h5, self._rrd) if w is not None]
 
     def on_step(self, rec, state, history) -> None:
-        """``run_scene`` hook: write the step to every open file and flush them."""
+        """``run_scene`` hook: write the step to every open file and flush them; the step counts as written
+        once both files have it. Raises :class:`OutputStopped` if the HDF5 file cannot take it."""
         tracked = {k: history[k][-1] for k in self.names}
         where = rec.time if self.kind == "dynamic" else rec.load_factor
         if self._h5 is not None:
@@ -114,11 +154,27 @@ class RunRecorder:
             stats = record_stats(rec)
             if self.kind == "dynamic":
                 stats.update(dynamic_stats(rec))
-            self._h5.write_step(rec.step, where, state, tracked, stats)
+            try:
+                self._h5.write_step(rec.step, where, state, tracked, stats)
+            except OSError as exc:
+                raise OutputStopped(str(exc)) from None
         if self._rrd is not None:
-            self._rrd.log_step(rec.step, where, state, tracked)
-            self._rrd.flush()
+            try:
+                self._rrd.log_step(rec.step, where, state, tracked)
+                self._rrd.flush()
+            except Exception as exc:  # a recording is for looking: it never stops the solve
+                self._drop_recording(exc)
         self.steps_written += 1
+
+    def _drop_recording(self, exc: Exception) -> None:
+        """Close the recording where it stands (its complete steps stay readable) and say so once."""
+        rrd, self._rrd = self._rrd, None
+        try:
+            rrd.close()
+        except Exception:
+            pass
+        self._warn(f"rerun recording {rrd.path!r} stopped after {self.steps_written} steps "
+                   f"({str(exc).splitlines()[0]}); the run goes on")
 
     def close(self) -> None:
         """Flush and close every file (idempotent)."""

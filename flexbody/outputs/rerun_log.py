@@ -8,6 +8,8 @@ Timelines
     ``load_factor``  (kind "static") duration timeline whose value *in seconds* is the load factor (rerun has
                      no floating-point timelines; the viewer shows e.g. 0.35 as "0.350s"; resolution 1e-9).
                      On a snap-back path (arc length) it is not monotonic: use ``step`` to replay in order.
+                     Values beyond +-:data:`TIMELINE_LIMIT` (int64 nanoseconds) are clamped to it; the
+                     ``step`` timeline and the logged outputs are exact.
     ``time``         (kind "dynamic") duration timeline: the simulated time in seconds.
     (rerun also adds its own ``log_time``, the wall-clock time of logging.)
 
@@ -25,6 +27,10 @@ Entity paths
                              load factors (styled as points), logged once at creation.
     ``stats/max_displacement``  Scalars, per step: the largest |x - X0| (the top of the colour scale when the
                              scale is automatic).
+
+The recording is locked against a second writer (:mod:`flexbody.outputs.files`), and a step that the disk
+cannot hold is refused before anything of it is logged (:class:`flexbody.outputs.files.DiskFullError`):
+rerun's file sink, once it meets a full disk, leaves a truncated file and its flush never returns.
 """
 
 from __future__ import annotations
@@ -33,11 +39,20 @@ import os
 
 import numpy as np
 
+from flexbody.outputs.files import check_free_space, lock_output, release
+
 # viridis at 0, 1/4, 1/2, 3/4, 1 (sRGB)
 _VIRIDIS = np.array([[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]], dtype=float)
 COLOR_BY = ("displacement", None)
 UNIFORM_COLOR = (180, 180, 190)
 TIMELINES = {"static": "load_factor", "dynamic": "time"}
+#: the largest magnitude of a duration timeline, s (int64 nanoseconds end at 9.22e9 s)
+TIMELINE_LIMIT = 9.2e9
+
+
+def timeline_seconds(values):
+    """Load factors or times as durations in seconds rerun can store: clamped to +-TIMELINE_LIMIT."""
+    return np.clip(values, -TIMELINE_LIMIT, TIMELINE_LIMIT)
 
 
 def colormap(values: np.ndarray, vmin: float, vmax: float) -> np.ndarray:
@@ -136,13 +151,19 @@ class RerunLogger:
         parent = os.path.dirname(os.path.abspath(self.path))
         if not os.path.isdir(parent):
             raise FileNotFoundError(f"cannot create rerun recording {self.path!r}: directory {parent!r} does not exist")
+        if os.path.exists(self.path) and not os.path.isfile(self.path):
+            raise OSError(f"cannot create rerun recording {self.path!r}: it is not a regular file")
+        check_free_space(self.path, self._step_bytes(), "rerun recording", 0)
+        self._lock = lock_output(self.path, "rerun recording")
         self._rec = rr.RecordingStream("flexbody")
         try:
             self._rec.save(self.path)
         except (RuntimeError, OSError) as exc:
             self._rec.disconnect()
+            release(self._lock)
             raise OSError(f"cannot create rerun recording {self.path!r}: {exc}") from None
         self._closed = False
+        self.steps_logged = 0
         try:
             self._log_static(scene_name, curves)
         except BaseException:
@@ -157,7 +178,7 @@ class RerunLogger:
         for name, (params, values) in curves.items():
             entity = f"reference/{rr.escape_entity_path_part(name)}"
             rec.log(entity, rr.SeriesPoints(names=f"{name} (reference)"), static=True)
-            rec.send_columns(entity, indexes=[rr.TimeColumn(self.timeline, duration=params)],
+            rec.send_columns(entity, indexes=[rr.TimeColumn(self.timeline, duration=timeline_seconds(params))],
                              columns=rr.Scalars.columns(scalars=values))
 
     # -- context manager --------------------------------------------------------------------------------------
@@ -176,8 +197,9 @@ class RerunLogger:
         if x.shape != self.nodes.shape:
             raise ValueError(f"state.x must have shape {self.nodes.shape}, got {x.shape}")
         d = np.asarray(state.frames, dtype=float)[:, :, 2]
+        check_free_space(self.path, self._step_bytes(), "rerun recording", self.steps_logged)
         rec.set_time("step", sequence=int(step))
-        rec.set_time(self.timeline, duration=float(load_factor_or_time))
+        rec.set_time(self.timeline, duration=float(timeline_seconds(float(load_factor_or_time))))
         u = np.linalg.norm(x - self.nodes, axis=1)
         umax = float(u.max()) if u.size else 0.0
         if self.color_by is None:
@@ -191,6 +213,11 @@ class RerunLogger:
         rec.log("stats/max_displacement", rr.Scalars(umax))
         for name, value in (tracked or {}).items():
             rec.log(f"outputs/{rr.escape_entity_path_part(str(name))}", rr.Scalars(float(value)))
+        self.steps_logged += 1
+
+    def _step_bytes(self) -> int:
+        """A generous bound on the bytes one step adds to the file (positions, normals, colours, arrows)."""
+        return 64 * len(self.nodes) + 4096
 
     def flush(self) -> None:
         """Write everything logged so far to the file (a run stopped later leaves it readable)."""
@@ -201,5 +228,8 @@ class RerunLogger:
         """Flush everything to the file and close it (idempotent)."""
         if not self._closed:
             self._closed = True
-            self._rec.flush()
-            self._rec.disconnect()
+            try:
+                self._rec.flush()
+                self._rec.disconnect()
+            finally:
+                release(self._lock)

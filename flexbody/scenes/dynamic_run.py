@@ -230,6 +230,20 @@ def _output_value(out, model, dyn, state, velocity: np.ndarray) -> float:
     return out.value(model, state)
 
 
+def _state_record(dyn, step: int, t: float, state, velocity: np.ndarray, wall_time: float):
+    """A step record of a state without solver statistics (the initial state; the last converged state of a
+    run that stopped between two output steps): 0 iterations, energies and momenta evaluated here."""
+    from integrators.generalized_alpha import DynamicStepRecord
+    p, L = dyn.momenta(state, velocity)
+    return DynamicStepRecord(step, t, 0, [], [], 0, 1, dyn.kinetic_energy(velocity), dyn.strain_energy(state),
+                             dyn.gravity_potential(state), p, L, wall_time)
+
+
+def _steps_taken(result, a: DynamicAnalysis) -> int:
+    """The number of whole time steps behind ``result.time`` (the integrator's steps end on a fixed grid)."""
+    return int(round(result.time / (a.end_time / a.n_steps)))
+
+
 def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callable | None = None,
                 notify: Callable[[CompileNotice], None] | None = None,
                 started: float | None = None) -> DynamicRunSummary:
@@ -237,11 +251,13 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
 
     ``on_step(record, state, history)`` is called for the initial state (record step 0, time 0) and for
     every recorded step; ``progress(record)`` for every recorded step; ``notify`` and ``started`` as in
-    :func:`flexbody.scenes.scene.run_scene`.
+    :func:`flexbody.scenes.scene.run_scene`. A run that stops early (a step that does not converge) also
+    records its last converged state when that is not an output step (``output_every`` > 1): the files, the
+    history and the summary then all end at that instant.
     """
     started = time.perf_counter() if started is None else started
     from flexbody.dynamics import DynamicModel
-    from integrators.generalized_alpha import DynamicStepRecord, generalized_alpha
+    from integrators.generalized_alpha import generalized_alpha
 
     model, a = scene.model, scene.analysis
     dyn = DynamicModel(model, gravity=a.gravity, load_factor=a.load_factor, prescribed=list(a.prescribed))
@@ -270,12 +286,14 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
         setup = time.perf_counter() - started
         compile_time = warm_up_kernels(model, notify)  # numba compilation is not run time
         t0 = time.perf_counter()
-        p, L = dyn.momenta(state, v0)
-        first = DynamicStepRecord(0, 0.0, 0, [], [], 0, 1, dyn.kinetic_energy(v0), dyn.strain_energy(state),
-                                  dyn.gravity_potential(state), p, L, 0.0)
-        record(first, state, v0, initial=True)
+        record(_state_record(dyn, 0, 0.0, state, v0, 0.0), state, v0, initial=True)
         result = generalized_alpha(dyn, a.end_time, a.time_step, state=state, velocity=v0,
                                    settings=a.alpha_settings(), on_step=record, record_every=a.output_every)
+        if result.time > history["time"][-1]:  # stopped between two output steps: record where it stopped
+            last = _state_record(dyn, _steps_taken(result, a), result.time, result.state, result.velocity,
+                                 time.perf_counter() - t0)
+            result.records.append(last)
+            record(last, result.state, result.velocity)
         wall = time.perf_counter() - t0
     errors = compare_in_time(history, scene.reference) if scene.reference else []
     return DynamicRunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, a, history, energies,

@@ -24,3 +24,21 @@ def square_mesh():
     elements = np.array([[0, 2, 8, 1, 5, 4], [0, 8, 6, 4, 7, 3]])
     directors = np.tile([0.0, 0.0, 1.0], (9, 1))
     return SimpleNamespace(nodes=nodes, elements=elements, directors=directors)
+
+
+def mount_small_disk(path: Path, size: str = "300k") -> None:
+    """Mount a tmpfs of ``size`` on ``path`` (a file system to fill); pytest.skip with the reason if mounting is
+    not permitted here (it needs root or CAP_SYS_ADMIN)."""
+    import shutil
+    import pytest
+    if shutil.which("mount") is None:
+        pytest.skip("no mount command: cannot make a small file system to fill")
+    path.mkdir(exist_ok=True)
+    out = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(path)],
+                         capture_output=True, text=True)
+    if out.returncode != 0:
+        pytest.skip(f"mounting a {size} tmpfs is not permitted here: {out.stderr.strip()}")
+
+
+def unmount(path: Path) -> None:
+    subprocess.run(["umount", "-l", str(path)], capture_output=True)
