@@ -30,6 +30,15 @@ from flexbody.scenes.scene import DynamicAnalysis, Reference, Scene, kernel_thre
 
 ENERGY_KEYS = ("kinetic", "strain", "gravity", "total")
 
+#: Accuracy limits of a completed dynamic run (docs/robustness.md, "Dynamic runs not to be trusted"): a run
+#: beyond one of them warns and ``flexbody run`` exits with 3. The rotation per step |omega| h (rad) of the
+#: body's fitted rigid spin or of a node's director:
+MAX_ROTATION_PER_STEP = 0.2
+#: the largest relative energy drift of a conservative body (``energy.total.max_rel_drift``):
+MAX_ENERGY_DRIFT = 0.05
+#: the largest relative drift of either momentum of an isolated body (``momentum.*.max_rel_drift``):
+MAX_MOMENTUM_DRIFT = 0.02
+
 
 def rigid_field(positions: np.ndarray, angular_velocity, center=None,
                 velocity=(0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
@@ -156,6 +165,7 @@ class DynamicRunSummary:
     total_mass: float
     isolated: bool
     conservative: bool
+    rotation_per_step: tuple[float, float] = (0.0, 0.0)   # the largest |omega| h of the recorded instants, and its time
 
     @property
     def max_rel_error(self) -> float:
@@ -192,6 +202,29 @@ class DynamicRunSummary:
                          "max_rel_drift": drift / scale if scale > 0 else float("nan")}
         return out
 
+    @property
+    def warnings(self) -> list[str]:
+        """Why a completed run is not to be trusted (empty if it is): a conserved quantity drifted beyond
+        ``MAX_ENERGY_DRIFT`` or ``MAX_MOMENTUM_DRIFT`` of its scale, or the body turned by more than
+        ``MAX_ROTATION_PER_STEP`` in a time step."""
+        out = []
+        drift = self.energy_summary()["total"]["max_rel_drift"]
+        if self.conservative and drift > MAX_ENERGY_DRIFT:
+            out.append(f"the energy of this conservative body drifted by {drift:.3g} of its scale "
+                       f"(limit {MAX_ENERGY_DRIFT:g})")
+        momenta = self.momentum_summary()
+        for name in ("linear", "angular"):
+            drift = momenta[name]["max_rel_drift"]
+            if self.isolated and drift > MAX_MOMENTUM_DRIFT:
+                out.append(f"the {name} momentum of this isolated body drifted by {drift:.3g} of its scale "
+                           f"(limit {MAX_MOMENTUM_DRIFT:g})")
+        turn, at = self.rotation_per_step
+        if turn > MAX_ROTATION_PER_STEP:
+            h = self.analysis.end_time / self.analysis.n_steps
+            out.append(f"the body turns by {turn:.3g} rad in a time step at t = {at:.4g} s (accuracy limit "
+                       f"{MAX_ROTATION_PER_STEP:g} rad): take dt <= {h * MAX_ROTATION_PER_STEP / turn:.3g} s")
+        return out
+
     def as_dict(self) -> dict:
         st = self.result.stats
         a = self.analysis
@@ -205,6 +238,9 @@ class DynamicRunSummary:
             "errors": self.errors, "max_rel_error": self.max_rel_error,
             "energy": self.energy_summary(), "momentum": self.momentum_summary(),
             "energy_history": {k: list(map(float, self.energies[k])) for k in ("time", *ENERGY_KEYS)},
+            "rotation_per_step": {"max": self.rotation_per_step[0], "time": self.rotation_per_step[1],
+                                  "limit": MAX_ROTATION_PER_STEP},
+            "warnings": self.warnings,
         }
 
 
@@ -218,6 +254,19 @@ def _is_isolated(scene: Scene) -> bool:
     model, a = scene.model, scene.analysis
     constrained = bool(np.any(model.fixed[:, :5]) or np.any(model.has_basis))
     return _is_conservative(scene) and not (constrained or np.any(np.asarray(a.gravity, float) != 0))
+
+
+def rotation_rate(dyn, state, velocity: np.ndarray) -> float:
+    """The fastest rotation in the body (rad/s): the larger of its fitted rigid spin
+    (:meth:`flexbody.dynamics.DynamicModel.rigid_angular_velocity`, which sees a spin about the directors,
+    a DoF the nodes do not have) and the fastest nodal (director) angular velocity."""
+    _, omega = nodal_fields(dyn, state, velocity)
+    nodal = float(np.linalg.norm(omega, axis=1).max(initial=0.0))
+    try:
+        rigid = float(np.linalg.norm(dyn.rigid_angular_velocity(state, velocity)))
+    except np.linalg.LinAlgError:          # all nodes on a line: no fit about that line
+        rigid = 0.0
+    return max(nodal, rigid)
 
 
 def _output_value(out, model, dyn, state, velocity: np.ndarray) -> float:
@@ -242,9 +291,14 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
     v0 = initial_velocity(dyn, state, a)
     history: dict[str, list[float]] = {"time": [], **{o.name: [] for o in scene.outputs}}
     energies: dict[str, list] = {k: [] for k in ("time", *ENERGY_KEYS, "linear_momentum", "angular_momentum")}
+    h = a.end_time / a.n_steps
+    turn = [0.0, 0.0]                        # the largest rotation per step so far, and its time
 
     def record(rec, q, v, initial: bool = False) -> None:
         history["time"].append(rec.time)
+        rate = rotation_rate(dyn, q, v) * h
+        if rate > turn[0]:
+            turn[:] = [rate, float(rec.time)]
         for out in scene.outputs:
             history[out.name].append(_output_value(out, model, dyn, q, v))
         energies["time"].append(rec.time)
@@ -270,4 +324,5 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
         wall = time.perf_counter() - t0
     errors = compare_in_time(history, scene.reference) if scene.reference else []
     return DynamicRunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, a, history, energies,
-                             errors, wall, dyn.inertia.total_mass, _is_isolated(scene), _is_conservative(scene))
+                             errors, wall, dyn.inertia.total_mass, _is_isolated(scene), _is_conservative(scene),
+                             tuple(turn))
