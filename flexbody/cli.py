@@ -212,7 +212,8 @@ def summary_lines(summary) -> list[str]:
             versus = (f"nearest point of the reference path {worst['reference']:.5g} at load factor "
                       f"{worst['reference_load_factor']:.3g}; distance in the normalised (value, load) plane")
         else:
-            versus = f"vs reference {worst['reference']:.5g}"
+            versus = f"vs reference {worst['reference']:.5g}" + (
+                ", interpolated between recorded steps" if worst.get("measure") == "interpolated" else "")
         lines.append(f"max rel. error   {d['max_rel_error']:.3e}  ({worst['quantity']} at {at}: "
                      f"{worst['value']:.5g} {versus})")
     if not d["converged"]:
