@@ -80,3 +80,18 @@ def test_the_strip_rolled_twice_in_coarse_steps_reports_its_true_error():
     d = summary.as_dict()
     assert set(np.round(np.linspace(0.2, 2.0, 10), 9)) <= set(np.round(d["history"]["load_factor"], 9))
     assert len(d["history"]["W_tip"]) == len(d["history"]["minus_U_tip"]) == d["steps"] == steps
+
+
+def test_the_json_summary_carries_the_path_history(tmp_path):
+    """Load factor and every tracked output at every converged step (before: only the last values)."""
+    import json
+
+    from flexbody.cli import main
+    path = tmp_path / "run.json"
+    assert main(["run", "cantilever_end_shear", "--set", "nx=4", "--set", "steps=4", "--json", str(path),
+                 "--quiet"]) == 0
+    d = json.loads(path.read_text())
+    assert d["history"]["load_factor"] == pytest.approx([0.25, 0.5, 0.75, 1.0])
+    assert set(d["history"]) == {"load_factor", "minus_U_tip", "W_tip"}
+    assert d["history"]["W_tip"][-1] == d["outputs"]["W_tip"] and len(d["history"]["W_tip"]) == d["steps"]
+    assert len(d["errors"]) == 8 and {e["measure"] for e in d["errors"]} == {"load_level"}
