@@ -278,23 +278,31 @@ def nearest_on_polyline(points: np.ndarray, polyline: np.ndarray) -> tuple[np.nd
     return dist[rows, k], foot[rows, k]
 
 
+def _steps_on_levels(lam: np.ndarray, ref_lam: np.ndarray, tol: float) -> np.ndarray:
+    """For each step, the index of the tabulated level it lies on (within ``tol``), or -1."""
+    nearest = np.abs(lam[:, None] - ref_lam[None, :]).argmin(axis=1)
+    return np.where(np.abs(ref_lam[nearest] - lam) <= tol, nearest, -1)
+
+
 def compare_with_reference(history: dict[str, list[float]], reference: Reference) -> list[dict]:
-    """Relative errors of the tracked outputs against the reference, at the converged steps only.
+    """Relative errors of the tracked outputs against the reference, at converged steps only.
 
-    Every converged step whose load factor lies within the reference's range is compared, and nothing is
-    interpolated between steps (linear interpolation across a coarse step of a strongly curved path, the strip
-    rolled twice into a circle in 0.2 M_max steps, reported 8.3 % for a path within 7e-5 at its steps):
+    Nothing is interpolated between steps, neither the path nor the table (linear interpolation across a
+    coarse step of a strongly curved path, the strip rolled twice into a circle in 0.2 M_max steps, reported
+    8.3 % for a path within 7e-5 at its steps):
 
-    * ``measure = "load_level"``: the load factor increases along the path and in the table, and the step
-      lies on a tabulated level: |value - reference| / s_q, with s_q = max |reference| of that quantity over
-      the table (so that values near zero at small loads do not blow up the measure);
-    * ``measure = "path"``: otherwise (a step between tabulated levels, or a path whose load factor is not
-      monotonic: snap-through, snap-back, arc length), the distance of the point (value / s_q, lambda / s_l)
-      to the reference polyline in that normalised plane, s_l = max |reference load factor|. It does not
-      depend on where the steps fall or on the direction the path takes, so it measures a path through a
-      snap, where the value at a load factor is not unique (comparing at the first crossing of each load
-      level reported 33 % for a path that lies on its reference). ``reference`` and
-      ``reference_load_factor`` are then the nearest point of the reference path.
+    * ``measure = "load_level"``: the load factor increases along the path and in the table, and some steps
+      lie on tabulated levels: at those steps (only), |value - reference| / s_q, with s_q = max |reference|
+      of that quantity over the table (so that values near zero at small loads do not blow up the measure);
+      ``load_factor`` is the tabulated level;
+    * ``measure = "path"``: otherwise (no step on a tabulated level, or a path whose load factor is not
+      monotonic: snap-through, snap-back, arc length), at every step within the table's load range, the
+      distance of the point (value / s_q, lambda / s_l) to the reference polyline in that normalised plane,
+      s_l = max |reference load factor|; ``reference`` and ``reference_load_factor`` are the nearest point
+      of the reference path. It does not depend on where the steps fall or on the direction the path takes,
+      so it measures a path through a snap, where the value at a load factor is not unique (comparing at
+      the first crossing of each load level reported 33 % for a path that lies on its reference). Where the
+      path is flat in load (a soft response) it is the load error rather than the displacement error.
     """
     lam = np.asarray(history["load_factor"], dtype=float)
     ref_lam = np.asarray(reference.load_factors, dtype=float)
@@ -302,7 +310,8 @@ def compare_with_reference(history: dict[str, list[float]], reference: Reference
         return []
     tol = _level_tolerance(lam, ref_lam)
     s_lam = float(np.abs(ref_lam).max()) or 1.0
-    monotonic = bool(np.all(np.diff(lam) > 0) and np.all(np.diff(ref_lam) > 0))
+    levels = _steps_on_levels(lam, ref_lam, tol)
+    at_levels = bool(np.all(np.diff(lam) > 0) and np.all(np.diff(ref_lam) > 0) and np.any(levels >= 0))
     inside = np.flatnonzero((lam >= ref_lam.min() - tol) & (lam <= ref_lam.max() + tol) & (lam > 0))
     errors = []
     for name, ref_vals in reference.values.items():
@@ -311,17 +320,16 @@ def compare_with_reference(history: dict[str, list[float]], reference: Reference
         ref_vals = np.asarray(ref_vals, dtype=float)
         s_q = float(np.abs(ref_vals).max()) or 1.0
         vals = np.asarray(history[name], dtype=float)
+        if at_levels:
+            errors += [{"quantity": name, "value": float(vals[i]), "load_factor": float(ref_lam[k]),
+                        "reference": float(ref_vals[k]), "rel_error": abs(vals[i] - ref_vals[k]) / s_q,
+                        "measure": "load_level"} for i, k in enumerate(levels) if k >= 0 and lam[i] > 0]
+            continue
         dist, foot = nearest_on_polyline(np.column_stack([vals[inside] / s_q, lam[inside] / s_lam]),
                                          np.column_stack([ref_vals / s_q, ref_lam / s_lam]))
-        for i, d, (fq, fl) in zip(inside, dist, foot):
-            level = int(np.argmin(np.abs(ref_lam - lam[i])))
-            if monotonic and abs(ref_lam[level] - lam[i]) <= tol:      # the tabulated level, not its round-off
-                entry = {"load_factor": float(ref_lam[level]), "reference": float(ref_vals[level]),
-                         "rel_error": abs(vals[i] - ref_vals[level]) / s_q, "measure": "load_level"}
-            else:
-                entry = {"load_factor": float(lam[i]), "reference": float(fq * s_q),
-                         "reference_load_factor": float(fl * s_lam), "rel_error": float(d), "measure": "path"}
-            errors.append({"quantity": name, "value": float(vals[i]), **entry})
+        errors += [{"quantity": name, "value": float(vals[i]), "load_factor": float(lam[i]),
+                    "reference": float(fq * s_q), "reference_load_factor": float(fl * s_lam),
+                    "rel_error": float(d), "measure": "path"} for i, d, (fq, fl) in zip(inside, dist, foot)]
     return errors
 
 

@@ -43,15 +43,28 @@ def test_a_snap_back_path_on_its_reference_has_a_small_error():
 
 
 def test_a_monotonic_path_is_compared_at_its_steps_without_interpolation():
-    """Steps at every other tabulated level of a curved path: exact at the steps (measure "load_level");
-    before, the interpolation between steps gave 1.2e-2."""
+    """Steps at every other tabulated level of a curved path and between them: compared at the levels they
+    step onto, exactly (measure "load_level"; the steps between are not compared: that would interpolate
+    the table); before, the interpolation between the steps gave 1.2e-2 (without the steps between)."""
     lam_ref = np.linspace(0.0, 2.0, 41)
-    w_ref = np.sin(np.pi * lam_ref)
-    lam = lam_ref[2::2]
+    lam = np.sort(np.concatenate([lam_ref[2::2], lam_ref[2::2] - 0.03]))
     errors = compare_with_reference({"load_factor": list(lam), "w": list(np.sin(np.pi * lam))},
-                                    Reference(lam_ref, {"w": w_ref}))
+                                    Reference(lam_ref, {"w": np.sin(np.pi * lam_ref)}))
     assert len(errors) == 20 and {e["measure"] for e in errors} == {"load_level"}
+    assert [e["load_factor"] for e in errors] == list(lam_ref[2::2])        # the tabulated levels
     assert max(e["rel_error"] for e in errors) < 1e-12
+
+
+def test_a_monotonic_path_off_the_tabulated_levels_is_measured_by_its_distance():
+    """No step on a tabulated level (7 steps against a table every 0.05): every step by its distance to
+    the reference path."""
+    lam_ref = np.linspace(0.0, 1.0, 21)
+    lam = np.arange(1, 8) / 7
+    lam[-1] = 1.0 + 1e-3                                                  # beyond the table: not compared
+    errors = compare_with_reference({"load_factor": list(lam), "w": list(np.sin(lam) * 1.01)},
+                                    Reference(lam_ref, {"w": np.sin(lam_ref)}))
+    assert len(errors) == 6 and {e["measure"] for e in errors} == {"path"}
+    assert 1e-3 < max(e["rel_error"] for e in errors) < 1.01e-2           # 1 % off in value, less in distance
 
 
 def rolled_twice(steps: int):
