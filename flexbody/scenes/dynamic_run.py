@@ -163,6 +163,8 @@ class DynamicRunSummary:
     isolated : the body is free, unloaded, without gravity and prescribed motion (its momenta are then
         conserved by the equations of motion)
     conservative : no loads and no prescribed motion (T + W + V_g is then conserved)
+    rotation_per_step : the largest rotation per time step |omega| h over the recorded instants
+        (:func:`rotation_rate`) and its time
     """
 
     scene: str
@@ -177,7 +179,7 @@ class DynamicRunSummary:
     total_mass: float
     isolated: bool
     conservative: bool
-    rotation_per_step: tuple[float, float] = (0.0, 0.0)   # the largest |omega| h of the recorded instants, and its time
+    rotation_per_step: tuple[float, float] = (0.0, 0.0)
 
     @property
     def max_rel_error(self) -> float:
