@@ -322,7 +322,7 @@ def compare_with_reference(history: dict[str, list[float]], reference: Reference
         vals = np.asarray(history[name], dtype=float)
         if at_levels:
             errors += [{"quantity": name, "value": float(vals[i]), "load_factor": float(ref_lam[k]),
-                        "reference": float(ref_vals[k]), "rel_error": abs(vals[i] - ref_vals[k]) / s_q,
+                        "reference": float(ref_vals[k]), "rel_error": float(abs(vals[i] - ref_vals[k]) / s_q),
                         "measure": "load_level"} for i, k in enumerate(levels) if k >= 0 and lam[i] > 0]
             continue
         dist, foot = nearest_on_polyline(np.column_stack([vals[inside] / s_q, lam[inside] / s_lam]),
