@@ -51,3 +51,11 @@ def test_a_driven_body_turning_too_far_per_step_warns(tmp_path, capsys):
     assert code == 3 and d["converged"] and len(d["warnings"]) == 1
     assert "rad in a time step" in d["warnings"][0] and "take dt <=" in d["warnings"][0]
     assert d["rotation_per_step"]["max"] > MAX_ROTATION_PER_STEP
+
+
+def test_a_body_at_rest_is_not_a_drift(tmp_path, capsys):
+    """omega = 0: energies of 1e-28 J (round-off) whose "drift" is 100 % of that scale; the drift checks
+    apply only to a motion faster than RESOLVED_MOTION eps L / h."""
+    code, d, _ = run(tmp_path, capsys, "spinning_plate", "--set", "omega=0", "--set", "end_time=0.02")
+    assert d["energy"]["total"]["max_rel_drift"] > 0.5 and d["energy"]["total"]["max_drift"] < 1e-20
+    assert code == 0 and d["warnings"] == []
