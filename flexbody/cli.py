@@ -11,6 +11,9 @@ a run that stops before its last load step writes its outputs and exits with 2 (
 cannot take another step, e.g. a full disk); an error inside the analysis exits with 1. Ctrl-C (SIGINT)
 and SIGTERM (what ``timeout`` and batch schedulers send) stop a run cleanly: the step being written is
 finished, the files are closed readable, and the exit code is 128 + the signal number (130, 143).
+a dynamic run that completes but is not to be trusted (a conserved energy or momentum drifted, or the
+body turned too far in a time step: docs/robustness.md) prints a WARNING line, lists it under ``warnings``
+in the JSON and exits with 3.
 """
 
 from __future__ import annotations
@@ -250,10 +253,18 @@ def summary_lines(summary) -> list[str]:
     if d["errors"]:
         worst = max(d["errors"], key=lambda e: e["rel_error"])
         at = f"time {worst['time']:.4g} s" if dynamic else f"load factor {worst['load_factor']:.3g}"
+        if worst.get("measure") == "path":
+            versus = (f"nearest point of the reference path {worst['reference']:.5g} at load factor "
+                      f"{worst['reference_load_factor']:.3g}; distance in the normalised (value, load) plane")
+        else:
+            versus = f"vs reference {worst['reference']:.5g}" + (
+                ", interpolated between recorded steps" if worst.get("measure") == "interpolated" else "")
         lines.append(f"max rel. error   {d['max_rel_error']:.3e}  ({worst['quantity']} at {at}: "
-                     f"{worst['value']:.5g} vs reference {worst['reference']:.5g})")
+                     f"{worst['value']:.5g} {versus})")
     if not d["converged"]:
         lines.append(f"NOT CONVERGED    {d['message']}")
+    if d.get("warnings"):
+        lines.append(f"WARNING          not to be trusted: {'; '.join(d['warnings'])} (docs/robustness.md)")
     return lines
 
 
@@ -314,7 +325,8 @@ class _StopSignals:
 def cmd_run(args) -> int:
     """``flexbody run``: check the output paths, build the scene, run it with the requested files written
     step by step, print the summary. Returns 0, 2 (not converged, or stopped because the --h5 file cannot
-    take a step), 1 (an error inside the analysis) or 128 + the signal number (SIGINT, SIGTERM)."""
+    take a step), 3 (completed, but not to be trusted: ``summary.warnings``), 1 (an error inside the
+    analysis) or 128 + the signal number (SIGINT, SIGTERM)."""
     t0 = time.perf_counter()
     params = _parse_sets(args.set or [])
     outputs = {"--json": args.json, "--h5": args.h5, "--rerun": args.rerun}
@@ -363,7 +375,9 @@ def cmd_run(args) -> int:
     if args.json:
         _write_json(args.json, summary.as_dict())
         print(f"written          {args.json}")
-    return 0 if summary.result.converged else 2
+    if not summary.result.converged:
+        return 2
+    return 3 if summary.warnings else 0
 
 
 # ----------------------------------------------------------------------------------------------------------

@@ -15,7 +15,11 @@ reference) and, for a dynamic run, the energy and momentum balance:
   measure the exchange with the surroundings.
 
 The errors against a reference are taken at the reference's times (linear interpolation between the
-recorded steps): |value - reference| / max|reference of that quantity|.
+recorded steps, marked as such): |value - reference| / max|reference of that quantity|.
+
+A completed run is checked for answers not to be trusted (:attr:`DynamicRunSummary.warnings`: the drift of
+a conserved energy or momentum, the rotation per step; limits ``MAX_*`` below, docs/robustness.md), which
+``flexbody run`` reports with exit code 3.
 """
 
 from __future__ import annotations
@@ -30,6 +34,21 @@ from flexbody.scenes.scene import (CompileNotice, DynamicAnalysis, Reference, Sc
                                    warm_up_kernels)
 
 ENERGY_KEYS = ("kinetic", "strain", "gravity", "total")
+
+#: Accuracy limits of a completed dynamic run (docs/robustness.md, "Dynamic runs not to be trusted"): a run
+#: beyond one of them warns and ``flexbody run`` exits with 3. The rotation per step |omega| h (rad) of the
+#: body's fitted rigid spin or of a node's director: the phase error of a spin, 0.31 (|omega| h)^2 of the
+#: angle turned (measured on ``spinning_plate``), reaches 1 % there:
+MAX_ROTATION_PER_STEP = 0.18
+#: the largest relative energy drift of a conservative body (``energy.total.max_rel_drift``; the built-in
+#: scenes reach 1.5e-3 at their default time steps):
+MAX_ENERGY_DRIFT = 0.02
+#: the largest relative drift of either momentum of an isolated body (``momentum.*.max_rel_drift``; the
+#: built-in scenes reach 7e-4):
+MAX_MOMENTUM_DRIFT = 0.01
+#: a drift is checked only for a motion faster than this many times the round-off velocity eps L / h (L the
+#: body's size): a body at rest has energies of 1e-28 J and drifts of 100 % of that
+RESOLVED_MOTION = 1e3
 
 
 def rigid_field(positions: np.ndarray, angular_velocity, center=None,
@@ -109,9 +128,12 @@ def initial_velocity(dyn, state, analysis: DynamicAnalysis) -> np.ndarray:
 
 
 def compare_in_time(history: dict[str, list[float]], reference: Reference) -> list[dict]:
-    """Relative errors at every reference time inside the recorded interval (linear interpolation).
+    """Relative errors at every reference time inside the recorded interval.
 
-    The relative error is |value - reference| / max|reference| of that quantity over the table.
+    The relative error is |value - reference| / max|reference| of that quantity over the table. A reference
+    time that is a recorded instant is compared there (``measure`` "recorded"); any other (a reference
+    between the recorded steps of ``output_every`` > 1) with the recorded values interpolated linearly
+    (``measure`` "interpolated": it adds the interpolation's error to the run's).
     """
     t = np.asarray(history["time"], dtype=float)
     errors = []
@@ -126,8 +148,10 @@ def compare_in_time(history: dict[str, list[float]], reference: Reference) -> li
             if tr < t[0] - 1e-12 or tr > t[-1] + 1e-12 * max(1.0, abs(t[-1])):
                 continue
             v = float(np.interp(tr, t, vals))
+            recorded = float(np.min(np.abs(t - tr))) <= 1e-9 * max(1.0, abs(t[-1]))
             errors.append({"quantity": name, "time": float(tr), "value": v, "reference": float(rv),
-                           "rel_error": abs(v - float(rv)) / scale})
+                           "rel_error": abs(v - float(rv)) / scale,
+                           "measure": "recorded" if recorded else "interpolated"})
     return errors
 
 
@@ -143,6 +167,9 @@ class DynamicRunSummary:
     isolated : the body is free, unloaded, without gravity and prescribed motion (its momenta are then
         conserved by the equations of motion)
     conservative : no loads and no prescribed motion (T + W + V_g is then conserved)
+    rotation_per_step : the largest rotation per time step |omega| h over the recorded instants
+        (:func:`rotation_rate`) and its time
+    size : the diagonal of the body's bounding box in the reference configuration
     """
 
     scene: str
@@ -159,6 +186,8 @@ class DynamicRunSummary:
     conservative: bool
     setup_time_s: float = 0.0               # building the scene (if the caller timed it), the mass, ...
     compile_time_s: float = 0.0             # compiling the kernels, or loading them from numba's cache
+    rotation_per_step: tuple[float, float] = (0.0, 0.0)
+    size: float = 0.0
 
     @property
     def max_rel_error(self) -> float:
@@ -195,6 +224,32 @@ class DynamicRunSummary:
                          "max_rel_drift": drift / scale if scale > 0 else float("nan")}
         return out
 
+    @property
+    def warnings(self) -> list[str]:
+        """Why a completed run is not to be trusted (empty if it is): a conserved quantity drifted beyond
+        ``MAX_ENERGY_DRIFT`` or ``MAX_MOMENTUM_DRIFT`` of its scale, or the body turned by more than
+        ``MAX_ROTATION_PER_STEP`` in a time step."""
+        out = []
+        h = self.analysis.end_time / self.analysis.n_steps
+        resolved = RESOLVED_MOTION * np.finfo(float).eps * self.size / h    # a velocity
+        e = {k: np.asarray(self.energies[k], dtype=float) for k in ENERGY_KEYS}
+        energy_velocity = np.sqrt(2.0 * np.max(e["kinetic"] + e["strain"] + np.abs(e["gravity"])) / self.total_mass)
+        drift = self.energy_summary()["total"]["max_rel_drift"]
+        if self.conservative and energy_velocity > resolved and drift > MAX_ENERGY_DRIFT:
+            out.append(f"the energy of this conservative body drifted by {drift:.3g} of its scale "
+                       f"(limit {MAX_ENERGY_DRIFT:g})")
+        momenta = self.momentum_summary()
+        for name in ("linear", "angular"):
+            drift = momenta[name]["max_rel_drift"]
+            if self.isolated and energy_velocity > resolved and drift > MAX_MOMENTUM_DRIFT:
+                out.append(f"the {name} momentum of this isolated body drifted by {drift:.3g} of its scale "
+                           f"(limit {MAX_MOMENTUM_DRIFT:g})")
+        turn, at = self.rotation_per_step
+        if turn > MAX_ROTATION_PER_STEP:
+            out.append(f"the body turns by {turn:.3g} rad in a time step at t = {at:.4g} s (accuracy limit "
+                       f"{MAX_ROTATION_PER_STEP:g} rad): take dt <= {h * MAX_ROTATION_PER_STEP / turn:.3g} s")
+        return out
+
     def as_dict(self) -> dict:
         st = self.result.stats
         a = self.analysis
@@ -209,6 +264,9 @@ class DynamicRunSummary:
             "energy": self.energy_summary(), "momentum": self.momentum_summary(),
             "energy_history": {k: list(map(float, self.energies[k])) for k in ("time", *ENERGY_KEYS)},
             **timings(self),
+            "rotation_per_step": {"max": self.rotation_per_step[0], "time": self.rotation_per_step[1],
+                                  "limit": MAX_ROTATION_PER_STEP},
+            "warnings": self.warnings,
         }
 
 
@@ -222,6 +280,19 @@ def _is_isolated(scene: Scene) -> bool:
     model, a = scene.model, scene.analysis
     constrained = bool(np.any(model.fixed[:, :5]) or np.any(model.has_basis))
     return _is_conservative(scene) and not (constrained or np.any(np.asarray(a.gravity, float) != 0))
+
+
+def rotation_rate(dyn, state, velocity: np.ndarray) -> float:
+    """The fastest rotation in the body (rad/s): the larger of its fitted rigid spin
+    (:meth:`flexbody.dynamics.DynamicModel.rigid_angular_velocity`, which sees a spin about the directors,
+    a DoF the nodes do not have) and the fastest nodal (director) angular velocity."""
+    _, omega = nodal_fields(dyn, state, velocity)
+    nodal = float(np.linalg.norm(omega, axis=1).max(initial=0.0))
+    try:
+        rigid = float(np.linalg.norm(dyn.rigid_angular_velocity(state, velocity)))
+    except np.linalg.LinAlgError:          # all nodes on a line: no fit about that line
+        rigid = 0.0
+    return max(nodal, rigid)
 
 
 def _output_value(out, model, dyn, state, velocity: np.ndarray) -> float:
@@ -266,9 +337,14 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
     v0 = initial_velocity(dyn, state, a)
     history: dict[str, list[float]] = {"time": [], **{o.name: [] for o in scene.outputs}}
     energies: dict[str, list] = {k: [] for k in ("time", *ENERGY_KEYS, "linear_momentum", "angular_momentum")}
+    h = a.end_time / a.n_steps
+    turn = [0.0, 0.0]                        # the largest rotation per step so far, and its time
 
     def record(rec, q, v, initial: bool = False) -> None:
         history["time"].append(rec.time)
+        rate = rotation_rate(dyn, q, v) * h
+        if rate > turn[0]:
+            turn[:] = [rate, float(rec.time)]
         for out in scene.outputs:
             history[out.name].append(_output_value(out, model, dyn, q, v))
         energies["time"].append(rec.time)
@@ -298,4 +374,4 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
     errors = compare_in_time(history, scene.reference) if scene.reference else []
     return DynamicRunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, a, history, energies,
                              errors, wall, dyn.inertia.total_mass, _is_isolated(scene), _is_conservative(scene),
-                             setup, compile_time)
+                             setup, compile_time, tuple(turn), float(np.linalg.norm(np.ptp(model.body.mesh.nodes, axis=0))))
