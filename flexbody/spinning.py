@@ -276,6 +276,7 @@ def steady_spin(dynamic: DynamicModel, omega, center=None, *, time: float = 0.0,
     center = _finite_vector(center, "the spin centre")
     if isinstance(n_steps, bool) or not isinstance(n_steps, (int, np.integer)) or not 1 <= n_steps <= 10_000:
         raise ValueError(f"n_steps must be an integer in 1..10000, got {n_steps!r}")
+    check_constant_rate(dynamic, omega, center, time)
     model = dynamic.model
     gauge: list[FixDirection] = []
     solve_dynamic = dynamic
@@ -301,3 +302,49 @@ def steady_spin(dynamic: DynamicModel, omega, center=None, *, time: float = 0.0,
     velocity = dynamic.rigid_velocity(state, omega, center=center)
     return SteadySpin(state, velocity, omega, center, result, tuple(int(g.nodes[0]) for g in gauge),
                       gauge_residual)
+
+
+# --------------------------------------------------------------------------------------------------------
+# A dynamic run that starts on the steady spin
+# --------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SteadySpinStart:
+    """The initial condition "the steady spin at ``angular_velocity`` about the axis through ``center``".
+
+    For :class:`flexbody.scenes.scene.DynamicAnalysis` (``initial_state``): the run starts from the relative
+    equilibrium of :func:`steady_spin` with its rigid velocity; a driven hub must turn at that constant rate from
+    t = 0. ``center`` None: the mass centre of the discrete body.
+    """
+
+    angular_velocity: tuple[float, float, float]
+    center: tuple[float, float, float] | None = None
+
+    def __post_init__(self) -> None:
+        w = _finite_vector(self.angular_velocity, "the steady-spin angular velocity")
+        if not np.any(w):
+            raise ValueError("the steady-spin angular velocity is zero: a steady spin needs omega != 0")
+        object.__setattr__(self, "angular_velocity", tuple(float(v) for v in w))
+        if self.center is not None:
+            object.__setattr__(self, "center", tuple(float(v) for v in _finite_vector(self.center,
+                                                                                     "the steady-spin centre")))
+
+
+def check_constant_rate(dynamic: DynamicModel, omega: np.ndarray, center: np.ndarray, time: float = 0.0) -> None:
+    """Raise ValueError unless every prescribed motion of ``dynamic`` turns rigidly at ``omega`` about the axis
+    through ``center`` at ``time`` (its rate measured by a one-sided difference of Q(t) over 1e-6 of a turn)."""
+    delta = 1e-6 * 2 * np.pi / float(np.linalg.norm(omega))
+    size = float(np.ptp(dynamic.model.body.mesh.nodes, axis=0).max()) + float(np.linalg.norm(center))
+    for p in dynamic.prescribed:
+        # one-sided second-order differences: a motion need not be defined before the start
+        (Q0, d0), (Q1, d1), (Q2, d2) = (tuple(np.asarray(v, float) for v in p.motion(time + k * delta))
+                                        for k in range(3))
+        Wdot = (-3 * Q0 + 4 * Q1 - Q2) / (2 * delta) @ Q0.T        # hat(omega) = Qdot Q^T
+        rate = np.array([Wdot[2, 1], Wdot[0, 2], Wdot[1, 0]])
+        ddot = (-3 * d0 + 4 * d1 - d2) / (2 * delta)
+        expected_ddot = -np.cross(omega, center)           # d = c - Q c: the axis through c stays put
+        scale = float(np.linalg.norm(omega))
+        if np.abs(rate - omega).max() > 1e-5 * scale or \
+                np.abs(ddot - expected_ddot).max() > 1e-5 * scale * size:
+            raise ValueError(f"a steady-spin start needs the driven hub turning at the constant rate "
+                             f"{np.asarray(omega).tolist()} rad/s about the spin axis from t = {time:g}; it turns at "
+                             f"{np.round(rate, 9).tolist()} (a hub spin-up needs ramp_time = 0 here)")

@@ -117,3 +117,38 @@ def test_fix_direction_refuses_a_zero_direction_and_normalises_huge_ones():
     with pytest.raises(ValueError, match="direction"):
         FixDirection([0], [0.0, 0.0, 0.0])
     assert np.allclose(FixDirection([0], [1e300, 1e300, 0.0]).direction, [2**-0.5, 2**-0.5, 0.0])
+
+
+# -- dynamic runs that start on the steady spin -------------------------------------------------------------
+from pathlib import Path  # noqa: E402
+
+from flexbody.scenes import load_toml_scene, run_scene  # noqa: E402
+from flexbody.scenes.sources import SceneError  # noqa: E402
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "spinning_membrane_steady.toml"
+
+
+def test_a_run_started_on_the_steady_spin_stays_on_it():
+    """The example: hub at a constant 20 rad/s from t = 0. The rim stretch is the rotating-disk one from the
+    first instant and does not breathe (a start from the unstretched state would oscillate about it with the
+    full stretch as amplitude), on one factorization."""
+    summary = run_scene(load_toml_scene(EXAMPLE, {"end_time": 0.03}))
+    assert summary.result.converged
+    u = np.asarray(summary.history["u_r_outer"])
+    ref = rotating_annulus_displacement(1.0, 20.0, 0.5, 1.0, E, NU, RHO, "hub")
+    assert abs(u[0] / ref - 1) < 6e-3                       # the mesh's chord error (2 x 32)
+    assert np.ptp(u) < 1e-3 * ref
+    assert summary.result.stats.factorizations <= 2
+    assert summary.max_rel_error < 6e-3
+
+
+def test_a_steady_spin_start_needs_the_hub_at_that_rate(tmp_path):
+    text = EXAMPLE.read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace('set = "inner"\nangular_velocity = [0.0, 0.0, 20.0]',
+                                'set = "inner"\nangular_velocity = [0.0, 0.0, 20.0]\nramp_time = 0.05'))
+    with pytest.raises(SceneError, match="ramp_time"):
+        load_toml_scene(bad)
+    bad.write_text(text.replace("[analysis.initial]\nstate", "[analysis.initial]\nvelocity = [1.0, 0.0, 0.0]\nstate"))
+    with pytest.raises(SceneError, match="velocity"):
+        load_toml_scene(bad)
