@@ -20,7 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from flexbody.body import ShellBody, ShellState, update_state
-from flexbody.constraints import Fix, Symmetry, basis_with_first
+from flexbody.constraints import Fix, FixDirection, Symmetry, basis_with_first
 from flexbody.frames import align_frame
 from flexbody.loads import FollowerPressure, NodalLoad, pressure_contribution
 from flexbody.scatter import scatter_blocks
@@ -131,6 +131,10 @@ class Model:
                         self._fix_direction(int(i), np.eye(3)[a])
                     self.fixed[i, 3] |= "r1" in comps
                     self.fixed[i, 4] |= "r2" in comps
+            elif isinstance(c, FixDirection):
+                self._check_nodes(c.nodes, "direction condition")
+                for i in c.nodes:
+                    self._fix_direction(int(i), c.direction)
             else:
                 raise ModelError(f"unknown constraint type {type(c).__name__}")
         if changed:

@@ -85,6 +85,25 @@ class Symmetry:
         object.__setattr__(self, "normal", n / np.linalg.norm(n))
 
 
+@dataclass(frozen=True)
+class FixDirection:
+    """Fix the translation of the listed nodes along one direction (a roller: free normal to it).
+
+    The nodes get a fixed translation basis whose first vector is ``direction``; the rotations stay free.
+    """
+
+    nodes: np.ndarray
+    direction: np.ndarray
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "nodes", node_indices(self.nodes, "FixDirection"))
+        d = np.asarray(self.direction, dtype=float)
+        if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.any(d):
+            raise ValueError(f"FixDirection direction must be a nonzero finite 3-vector, got {self.direction!r}")
+        d = d / np.abs(d).max()                     # no overflow of the norm for huge components
+        object.__setattr__(self, "direction", d / np.linalg.norm(d))
+
+
 def basis_with_first(direction: np.ndarray) -> np.ndarray:
     """An orthonormal basis (columns) whose first vector is ``direction``."""
     d = direction / np.linalg.norm(direction)

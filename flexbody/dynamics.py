@@ -142,6 +142,11 @@ class DynamicModel:
     def n_dof(self) -> int:
         return self.model.n_dof
 
+    @property
+    def gravity_force(self) -> np.ndarray:
+        """The dead nodal forces m_I g on the free DoFs (the rows of the Model)."""
+        return self._gravity_force
+
     def lam(self, t: float) -> float:
         return 1.0 if self.load_factor is None else float(self.load_factor(t))
 

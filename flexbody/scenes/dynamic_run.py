@@ -75,7 +75,7 @@ def spin_up_angle(rate: float, ramp: float) -> Callable[[float], float]:
     The angular acceleration is continuous and vanishes at both ends of the ramp (ramp = 0: rate from t = 0).
     """
     def angle(t: float) -> float:
-        if t < ramp:
+        if 0 < ramp and t < ramp:
             return rate * (t / 2 - ramp / (2 * np.pi) * np.sin(np.pi * t / ramp))
         return rate * (ramp / 2 + t - ramp)
     return angle
@@ -125,6 +125,23 @@ def initial_velocity(dyn, state, analysis: DynamicAnalysis) -> np.ndarray:
     xdot = _nodal_array(analysis.initial_velocity, n, "initial_velocity")
     omega = _nodal_array(analysis.initial_angular_velocity, n, "initial_angular_velocity")
     return dyn.velocity_from_nodal(state, xdot, omega)
+
+
+def initial_conditions(dyn, analysis: DynamicAnalysis):
+    """The state and free-DoF velocity at t = 0.
+
+    ``analysis.initial_state`` None: the reference configuration; a state: that one; a
+    :class:`flexbody.spinning.SteadySpinStart`: the steady spin (:func:`flexbody.spinning.steady_spin`) with its
+    rigid velocity, to which the analysis' nodal initial velocities are added (a kick on the steady spin).
+    """
+    from flexbody.spinning import SteadySpinStart, steady_spin
+    start = analysis.initial_state
+    if isinstance(start, SteadySpinStart):
+        spin = steady_spin(dyn, start.angular_velocity, start.center)
+        state = dyn.prescribe(spin.state, 0.0)
+        return state, spin.velocity + initial_velocity(dyn, state, analysis)
+    state = dyn.prescribe(dyn.model.initial_state() if start is None else start, 0.0)
+    return state, initial_velocity(dyn, state, analysis)
 
 
 def compare_in_time(history: dict[str, list[float]], reference: Reference) -> list[dict]:
@@ -332,9 +349,7 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
 
     model, a = scene.model, scene.analysis
     dyn = DynamicModel(model, gravity=a.gravity, load_factor=a.load_factor, prescribed=list(a.prescribed))
-    state = model.initial_state() if a.initial_state is None else a.initial_state
-    state = dyn.prescribe(state, 0.0)
-    v0 = initial_velocity(dyn, state, a)
+    state, v0 = initial_conditions(dyn, a)
     history: dict[str, list[float]] = {"time": [], **{o.name: [] for o in scene.outputs}}
     energies: dict[str, list] = {k: [] for k in ("time", *ENERGY_KEYS, "linear_momentum", "angular_momentum")}
     h = a.end_time / a.n_steps

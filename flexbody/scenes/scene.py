@@ -125,7 +125,10 @@ class DynamicAnalysis:
     gravity : body acceleration g (3,)
     load_factor : lambda(t) that scales the Model's loads (None: 1 at all times)
     prescribed : rigid motions in time of clamped nodes (:class:`flexbody.dynamics.PrescribedMotion`)
-    initial_state : the configuration at t = 0 (None: the reference configuration)
+    initial_state : the configuration at t = 0 (None: the reference configuration), or
+        :class:`flexbody.spinning.SteadySpinStart`: the steady spin (relative equilibrium) at a constant
+        angular velocity with its rigid velocity field, to which ``initial_velocity`` and
+        ``initial_angular_velocity`` are then added (a kick); a driven hub must turn at that rate from t = 0
     initial_velocity : nodal translational velocities at t = 0 (n, 3) (None: zero)
     initial_angular_velocity : nodal angular velocities at t = 0 in global components (n, 3) (None: zero);
         the components about the directors are not DoFs and are dropped

@@ -12,7 +12,8 @@ In short (every table but ``[mesh]``, ``[material]`` and one ``[[output]]`` is o
     [analysis]             method = "load_control" | "arc_length", steps, max_load_factor, ...
     [analysis.newton]      any field of integrators.newton.NewtonSettings
       or [analysis]        type = "dynamic", dt, end_time, rho_inf, policy, output_every, gravity, load_ramp_time
-    [analysis.initial]     velocity, angular_velocity, center: a rigid initial velocity field (dynamic)
+    [analysis.initial]     velocity, angular_velocity, center: a rigid initial velocity field (dynamic);
+                           state = "steady_spin": start on the steady spin at angular_velocity instead
     [analysis.hub]         a node selection, angular_velocity, ramp_time, center: a hub spun up (dynamic)
     [analysis.integrator]  rtol, atol, max_iterations, refresh_ratio, max_cutbacks, ... (dynamic)
     [[output]]             name, a node selection of one node, component or direction, scale; or
@@ -522,12 +523,22 @@ def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None) -> Dy
     kwargs: dict[str, Any] = {}
     if t.has("initial"):
         it = t.table("initial")
+        start = it.string("state", "reference", choices=("reference", "steady_spin"))
         omega = it.vector("angular_velocity", [0.0, 0.0, 0.0])
         velocity = it.vector("velocity", [0.0, 0.0, 0.0])
         center = it.vector("center") if it.has("center") else _centre_of_mass(body)
-        it.done(["velocity", "angular_velocity", "center"])
-        xdot, w = rigid_field(body.mesh.nodes, omega, center, velocity)
-        kwargs.update(initial_velocity=xdot, initial_angular_velocity=w)
+        it.done(["state", "velocity", "angular_velocity", "center"])
+        if start == "steady_spin":
+            if np.any(velocity):
+                raise it.error("velocity", "must be zero with state = \"steady_spin\" (a relative equilibrium "
+                                           f"spins about a fixed axis), got {velocity}")
+            if not np.any(omega):
+                raise it.error("angular_velocity", "must be nonzero with state = \"steady_spin\"")
+            from flexbody.spinning import SteadySpinStart
+            kwargs["initial_state"] = SteadySpinStart(tuple(omega), tuple(center))
+        else:
+            xdot, w = rigid_field(body.mesh.nodes, omega, center, velocity)
+            kwargs.update(initial_velocity=xdot, initial_angular_velocity=w)
     if t.has("hub"):
         ht = t.table("hub")
         for key in _SELECTORS:       # already read by _hub_nodes
@@ -539,6 +550,12 @@ def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None) -> Dy
         center = ht.vector("center", [0.0, 0.0, 0.0])
         ht.done([*_SELECTORS, "angular_velocity", "ramp_time", "center"])
         kwargs["prescribed"] = (PrescribedMotion(hub_nodes, hub_spin_up(omega, hub_ramp, center)),)
+        spin = kwargs.get("initial_state")
+        if spin is not None and (hub_ramp > 0 or not np.allclose(omega, spin.angular_velocity, rtol=1e-12, atol=0)):
+            raise ht.error("angular_velocity" if hub_ramp == 0 else "ramp_time",
+                           "a steady-spin start needs the hub at the constant rate of analysis.initial from t = 0 "
+                           f"(ramp_time = 0, angular_velocity = {list(spin.angular_velocity)}), got "
+                           f"{omega.tolist()} with ramp_time = {hub_ramp}")
     t.done(list(_DYNAMIC_KEYS))
     return _wrap(t.where, "analysis", DynamicAnalysis, dt, end, rho_inf, policy, every, tuple(gravity),
                  load_factor, settings=settings, **kwargs)
