@@ -110,11 +110,21 @@ def _open(name: str):
 
 
 def _build(source, params: dict):
+    """The scene of ``source`` with ``params``; a bad scene is a CliError, a mesh of several separate pieces
+    a note on stderr (each piece moves on its own; a static run checks that each one is supported)."""
+    import numpy as np
+
     from flexbody.scenes.sources import SceneError
     try:
-        return source.build(params)
+        scene = source.build(params)
     except SceneError as exc:
         raise CliError(str(exc)) from None
+    count, labels = scene.model.body.mesh.connected_components()
+    if count > 1:
+        sizes = np.bincount(labels)
+        print(f"note: the mesh of {scene.name} has {count} separate pieces (nodes per piece: "
+              f"{', '.join(map(str, sizes[:10]))}{', ...' if count > 10 else ''})", file=sys.stderr)
+    return scene
 
 
 def _write_json(path: str, data) -> None:
@@ -283,6 +293,8 @@ def _mesh_sequence(source, refine: list[dict], scene=None) -> list[dict]:
 def _bench_one(source, params: dict, label: str, quiet: bool):
     from flexbody.outputs.report import BenchRun
     from flexbody.scenes.scene import run_scene
+    import numpy as np
+
     from flexbody.scenes.sources import SceneError
     try:
         scene = source.build(params)

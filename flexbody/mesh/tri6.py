@@ -114,6 +114,24 @@ class Tri6Mesh:
                         {**self.edge_sets, **(edge_sets or {})}, self.allow_coincident_nodes)
 
     # -- topology ---------------------------------------------------------------------------------------
+    def connected_components(self) -> tuple[int, np.ndarray]:
+        """The separate pieces of the mesh: their number and each node's piece label (n,), 0, 1, ...
+
+        Two elements are in one piece when a chain of elements sharing nodes joins them. Pieces are
+        numbered in the order of their lowest node index.
+        """
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+
+        conn = self.elements
+        graph = coo_matrix((np.ones(conn[:, 1:].size), (np.repeat(conn[:, 0], 5), conn[:, 1:].ravel())),
+                           shape=(self.n_nodes, self.n_nodes))
+        count, labels = connected_components(graph, directed=False)
+        _, first = np.unique(labels, return_index=True)          # renumber by lowest node
+        order = np.empty(count, dtype=np.int64)
+        order[np.argsort(first)] = np.arange(count)
+        return int(count), order[labels]
+
     def boundary_edges(self) -> np.ndarray:
         """All boundary edges (k, 3) as (corner, midside, corner), oriented as in their element."""
         triples = self.elements[:, ELEMENT_EDGES].reshape(-1, 3)

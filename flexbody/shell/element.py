@@ -61,6 +61,7 @@ import numba.extending
 import numpy as np
 from numba import prange
 
+from flexbody.kernel_arrays import kernel_input as _as
 from flexbody.lie import kernels as lk
 from flexbody.lie.so3 import SERIES, SERIES_SWITCH
 from flexbody.shell.geometry import EVAL_DN, EVAL_N, GAUSS_OFFSET, N_GAUSS
@@ -2170,13 +2171,6 @@ def _n_chunks(m: int) -> int:
     if m < 128:
         return 1
     return max(1, min(m, 4 * numba.get_num_threads()))
-
-
-def _as(a, shape_tail, name):
-    a = np.ascontiguousarray(a, dtype=np.float64)
-    if a.shape[1:] != shape_tail:
-        raise ValueError(f"{name} must have shape (m, {', '.join(map(str, shape_tail))}), got {a.shape}")
-    return a
 
 
 def _element_arrays(x_el, frames_el, e_ref, to_cart, **more):
