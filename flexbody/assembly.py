@@ -201,7 +201,8 @@ class Model:
         scale = max(np.abs(self.dead).max(), np.abs(self.follower).max())
         if np.abs(f).max() <= 1e-12 * scale:
             nodes = np.flatnonzero(loaded)
-            raise ModelError(f"every load acts on constrained DoFs only (nodes {_listed(nodes)}): the supports "
+            raise ModelError(f"every load acts on constrained DoFs only (node{'s' if nodes.size > 1 else ''} "
+                             f"{_listed(nodes)}): the supports "
                              "carry all of it and nothing moves; load free nodes or free the constraint")
 
     # -- sizes -------------------------------------------------------------------------------------------
