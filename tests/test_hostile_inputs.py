@@ -371,3 +371,17 @@ def test_numba_entry_points_check_their_arrays(case):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, env=env)
     assert out.returncode == 1, (out.returncode, out.stderr[-500:])
     assert out.stderr.strip().splitlines()[-1] == message
+
+
+def test_absurd_time_step_counts_are_refused(tmp_path):
+    from flexbody.scenes.scene import DynamicAnalysis
+    with pytest.raises(ValueError, match=r"end_time / time_step asks for 1e\+12 time steps, at most 10000000"):
+        DynamicAnalysis(1e-12, 1.0)           # used to hang in the list of output times
+    DynamicAnalysis(1e-6, 10.0)               # 1e7 steps: allowed
+    refused(run_cli(["run", "spinning_plate", "--set", "dt=1e-12"], tmp_path),
+            "cannot build scene 'spinning_plate': end_time / time_step asks for")
+
+
+def test_a_builtin_scene_error_is_not_quoted(tmp_path):
+    line = refused(run_cli(["run", "cantilever_end_shear", "--set", "nx=0"], tmp_path))
+    assert line.startswith("flexbody: cannot build scene 'cantilever_end_shear': nx must be an integer >= 1, got 0"), line

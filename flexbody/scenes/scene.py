@@ -176,6 +176,8 @@ class DynamicAnalysis:
     """
 
     SINGLE_THREAD_ELEMENTS: ClassVar[int] = 2000
+    #: the most time steps a run may ask for (1e12 steps hung in the list of output times)
+    MAX_TIME_STEPS: ClassVar[int] = 10_000_000
 
     time_step: float
     end_time: float
@@ -198,6 +200,9 @@ class DynamicAnalysis:
                 raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
         if self.time_step > self.end_time:
             raise ValueError(f"time_step must not exceed end_time, got {self.time_step!r} > {self.end_time!r}")
+        if self.end_time / self.time_step > self.MAX_TIME_STEPS:
+            raise ValueError(f"end_time / time_step asks for {self.end_time / self.time_step:.3g} time steps, at most "
+                             f"{self.MAX_TIME_STEPS} (time_step {self.time_step!r}, end_time {self.end_time!r})")
         if isinstance(self.rho_inf, bool) or not isinstance(self.rho_inf, (int, float)) or not 0 <= self.rho_inf <= 1:
             raise ValueError(f"rho_inf must lie in [0, 1], got {self.rho_inf!r}")
         if self.policy not in ("modified", "full"):

@@ -55,7 +55,8 @@ class SceneSource:
             raise
         except (ValueError, TypeError, KeyError) as exc:
             msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
-            raise SceneError(f"cannot build scene {self.name!r}: {str(msg).splitlines()[0] if msg else exc!r}") from None
+            text = str(msg).splitlines()[0] if msg else repr(exc)      # (a `!r` here quoted every message)
+            raise SceneError(f"cannot build scene {self.name!r}: {text}") from None
 
 
 def scene_kind(name: str) -> str:
