@@ -38,7 +38,7 @@ def hat_many(v: np.ndarray) -> np.ndarray:
 
 
 class ModelError(ValueError):
-    """A model that cannot be solved as given (bad constraint, load on a constrained DoF, ...)."""
+    """A model that cannot be solved as given (bad constraint, every DoF fixed, loads on constrained DoFs only, ...)."""
 
 
 def _listed(indices: np.ndarray, at_most: int = 5) -> str:
