@@ -385,3 +385,11 @@ def test_absurd_time_step_counts_are_refused(tmp_path):
 def test_a_builtin_scene_error_is_not_quoted(tmp_path):
     line = refused(run_cli(["run", "cantilever_end_shear", "--set", "nx=0"], tmp_path))
     assert line.startswith("flexbody: cannot build scene 'cantilever_end_shear': nx must be an integer >= 1, got 0"), line
+
+
+def test_a_near_point_far_from_the_mesh_is_refused(tmp_path):
+    # [1e300, 0.5, 0]: every distance overflowed to inf and node 0 (at the clamp) "was nearest"; the tip is
+    assert MESH.nearest_node([1e5, 0.5, 0.0]) == MESH.nearest_node([10.0, 0.5, 0.0])
+    scene = strip_scene(tmp_path, STRIP_TOML.replace("near = [10.0, 0.5, 0.0]", "near = [1e300, 0.5, 0.0]"))
+    refused(run_cli(["run", scene.name], tmp_path), "output.0.near", "point [1e+300, 0.5, 0.0] lies 1e+299 model "
+            "sizes away from the mesh (at most 1e+06)")

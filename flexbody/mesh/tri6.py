@@ -20,6 +20,9 @@ from flexbody.shell.shape import gauss_triangle_7, shape_derivatives, shape_func
 #: local node triples (corner, midside, corner) of the three element edges
 ELEMENT_EDGES = np.array([[0, 3, 1], [1, 4, 2], [2, 5, 0]])
 
+#: a point whose nearest node is asked for lies at most this many model sizes away from the mesh
+NEAR_LIMIT = 1e6
+
 #: a midside node may sit at most this fraction of its edge's chord away from the chord's midpoint
 MIDSIDE_TOLERANCE = 0.25
 
@@ -101,10 +104,17 @@ class Tri6Mesh:
         return self.edge_sets[name]
 
     def nearest_node(self, point) -> int:
-        """Index of the node nearest to ``point`` (3,)."""
+        """Index of the node nearest to ``point`` (3,), which must lie within ``NEAR_LIMIT`` model sizes of
+        the mesh (farther away the distances overflow or round to one value, and any node could win)."""
         p = np.asarray(point, dtype=float)
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise MeshError(f"point must be a finite 3-vector, got {point!r}")
+        size = float(np.ptp(self.nodes, axis=0).max())
+        low, high = self.nodes.min(axis=0), self.nodes.max(axis=0)
+        outside = np.abs(p - np.clip(p, low, high)).max()          # no overflow: no squares
+        if outside > NEAR_LIMIT * size:
+            raise MeshError(f"point {p.tolist()} lies {outside / size:.3g} model sizes away from the mesh (at most "
+                            f"{NEAR_LIMIT:g}); give a point near the node you mean")
         return int(np.argmin(np.linalg.norm(self.nodes - p, axis=1)))
 
     def with_sets(self, node_sets: Mapping[str, np.ndarray] | None = None,

@@ -349,7 +349,7 @@ def _select_nodes(t: _Table, mesh, *, single: bool = False) -> np.ndarray:
             raise t.error("nodes", f"names node {bad[0]}, but the mesh has nodes 0..{mesh.n_nodes - 1}")
         nodes = np.unique(np.array(value, dtype=int))
     elif kind == "near":
-        nodes = np.array([mesh.nearest_node(t.vector("near"))])
+        nodes = np.array([_wrap(t.where, t.key("near"), mesh.nearest_node, t.vector("near"))])
     elif kind == "ring":
         ring = t.table("ring")
         radius = ring.number("radius", positive=True)
