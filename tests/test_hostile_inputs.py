@@ -210,7 +210,8 @@ def test_a_model_with_no_free_dof_is_refused():
 
 
 def test_cli_plane_selecting_every_node_is_refused(tmp_path):
-    scene = strip_scene(tmp_path, STRIP_TOML.replace('set = "clamped"', 'plane = { point = [0, 0, 0], normal = [0, 0, 1e300] }'))
+    scene = strip_scene(tmp_path, STRIP_TOML.replace('set = "clamped"',
+                                                     'plane = { point = [0, 0, 0], normal = [0, 0, 1e300] }'))
     refused(run_cli(["run", scene.name], tmp_path), "the constraints fix every DoF of the body's 15 nodes")
 
 
@@ -384,7 +385,7 @@ def test_absurd_time_step_counts_are_refused(tmp_path):
 
 def test_a_builtin_scene_error_is_not_quoted(tmp_path):
     line = refused(run_cli(["run", "cantilever_end_shear", "--set", "nx=0"], tmp_path))
-    assert line.startswith("flexbody: cannot build scene 'cantilever_end_shear': nx must be an integer >= 1, got 0"), line
+    assert line == "flexbody: cannot build scene 'cantilever_end_shear': nx must be an integer >= 1, got 0", line
 
 
 def test_a_near_point_far_from_the_mesh_is_refused(tmp_path):
