@@ -202,8 +202,8 @@ class Model:
         if np.abs(f).max() <= 1e-12 * scale:
             nodes = np.flatnonzero(loaded)
             raise ModelError(f"every load acts on constrained DoFs only (node{'s' if nodes.size > 1 else ''} "
-                             f"{_listed(nodes)}): the supports "
-                             "carry all of it and nothing moves; load free nodes or free the constraint")
+                             f"{_listed(nodes)}): the supports carry all of it and nothing moves (a moment "
+                             "about a director does no work either); load free nodes or free the constraint")
 
     # -- sizes -------------------------------------------------------------------------------------------
     @property

@@ -394,3 +394,10 @@ def test_a_near_point_far_from_the_mesh_is_refused(tmp_path):
     scene = strip_scene(tmp_path, STRIP_TOML.replace("near = [10.0, 0.5, 0.0]", "near = [1e300, 0.5, 0.0]"))
     refused(run_cli(["run", scene.name], tmp_path), "output.0.near", "point [1e+300, 0.5, 0.0] lies 1e+299 model "
             "sizes away from the mesh (at most 1e+06)")
+
+
+def test_a_drilling_moment_alone_is_refused():
+    # the moment about the director does no work on a 5-DoF node: alone it would move nothing
+    with pytest.raises(ModelError, match=r"every load acts on constrained DoFs only \(node 25\).*a moment about a "
+                                         "director does no work either"):
+        Model(ShellBody(MESH, MAT), [Fix(MESH.node_set("clamped"))], [NodalLoad([25], moment=(0, 0, 1.0))])
