@@ -110,14 +110,18 @@ def _open(name: str):
 
 
 def _build(source, params: dict):
-    """The scene of ``source`` with ``params``; a bad scene is a CliError, a mesh of several separate pieces
-    a note on stderr (each piece moves on its own; a static run checks that each one is supported)."""
+    """The scene of ``source`` with ``params``; a bad scene, or a static one whose supports leave a rigid
+    motion free (checked now, before the kernels compile), is a CliError; a mesh of several separate pieces
+    is a note on stderr (each piece moves on its own)."""
     import numpy as np
 
+    from flexbody.assembly import ModelError
     from flexbody.scenes.sources import SceneError
     try:
         scene = source.build(params)
-    except SceneError as exc:
+        if scene.kind == "static":
+            scene.model.check_static_support()
+    except (SceneError, ModelError) as exc:
         raise CliError(str(exc)) from None
     count, labels = scene.model.body.mesh.connected_components()
     if count > 1:
