@@ -23,8 +23,7 @@ from integrators.linear import LinearSolver, SingularMatrixError
 
 @dataclass
 class NewtonSettings:
-    rtol: float = 1e-8            # ||r|| <= rtol * reference force
-    atol: float = 1e-12           # absolute floor on ||r||
+    rtol: float = 1e-8            # ||r|| <= rtol * reference force (the model's own: no absolute floor)
     increment_tol: float = 1e-11  # or: max |dq_i / scale_i| <= increment_tol (round-off floor reached)
     max_iterations: int = 25
     policy: str = "full"          # "full" or "modified"
@@ -48,8 +47,10 @@ class NewtonSettings:
     def __post_init__(self) -> None:
         if self.policy not in ("full", "modified"):
             raise ValueError(f"Newton policy must be 'full' or 'modified', got {self.policy!r}")
-        if not (self.rtol > 0 and self.max_iterations >= 1):
-            raise ValueError("Newton rtol must be > 0 and max_iterations >= 1")
+        if not 0 < self.rtol < 1:
+            raise ValueError(f"Newton rtol must lie in (0, 1) (a fraction of the reference force), got {self.rtol!r}")
+        if not self.max_iterations >= 1:
+            raise ValueError(f"Newton max_iterations must be >= 1, got {self.max_iterations!r}")
         if not isinstance(self.mixed, bool):
             raise ValueError(f"Newton mixed must be true or false, got {self.mixed!r}")
         if not (self.lazy_tangent >= 0):
@@ -89,12 +90,18 @@ def _first_non_finite(r: np.ndarray) -> str:
 def newton_solve(state, residual: Callable, residual_and_tangent: Callable, update: Callable,
                  reference_norm: float, settings: NewtonSettings, solver: LinearSolver,
                  stats: NewtonStats, fresh_tangent: bool = True, dof_scale=1.0,
-                 conjugate: Callable | None = None, held_lag: float = float("inf")):
+                 conjugate: Callable | None = None, held_lag: float = float("inf"),
+                 load: np.ndarray | None = None, min_iterations: int = 0):
     """Solve r(q) = 0 from ``state``; returns (state, outcome). Never returns a non-finite state.
 
-    Converged when ||r|| <= max(rtol * reference_norm, atol), or when an increment scaled by ``dof_scale``
-    (a length for translations, 1 for rotations) is below ``increment_tol``: the residual has then reached
-    its round-off floor, which for thin shells (membrane stiffness >> bending load) can lie above rtol.
+    Converged when ||r|| <= rtol * reference, or when an increment scaled by ``dof_scale`` (a length for
+    translations, 1 for rotations) is below ``increment_tol``: the residual has then reached its round-off
+    floor, which for thin shells (membrane stiffness >> bending load) can lie above rtol. The reference is
+    the model's own force scale, never an absolute number: ``reference_norm`` (the norm of the step's
+    external load) or, with ``load`` (that external load vector, r = f_int - load), the norm of the
+    iterate's internal forces f_int = r + load if larger. So the tests are scale-free: a model in other
+    units (forces, lengths) takes the same iterations. A step whose load changed needs at least
+    ``min_iterations`` corrections (1: never "converged" without moving).
     ``solver`` may hold a factorization from earlier iterations or steps: it serves the first iteration
     unless ``fresh_tangent`` (the static solvers pass False under the "full" policy only when it was
     computed within ``lazy_tangent`` of the start: the last iterates of the previous step); ``held_lag`` is
@@ -120,8 +127,7 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
     (Measured on the load-control benchmarks it still costs 1.7-26x the iterations of plain Newton,
     docs/performance.md: it is off by default.)
     """
-    scale = max(reference_norm, settings.atol)
-    tol = max(settings.rtol * scale, settings.atol)
+    tol = settings.rtol * reference_norm
     outcome = NewtonOutcome(False, 0)
     need_tangent = fresh_tangent or not solver.ready
     lag = held_lag
@@ -149,7 +155,9 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
         if not reevaluated:
             outcome.residuals.append(norm)
         reevaluated = False
-        if norm <= tol:
+        if load is not None:
+            tol = settings.rtol * max(reference_norm, float(np.linalg.norm(r + load)))
+        if norm <= tol and it >= min_iterations:
             outcome.converged = True
             outcome.iterations = it
             outcome.factorization_lag = lag

@@ -60,8 +60,11 @@ class StaticResult:
 MAX_EXTRAPOLATION = 2.0   # the secant predictor extrapolates at most twice the previous step
 
 
-def _reference_norm(model, state, lam: float) -> float:
-    return abs(lam) * float(np.linalg.norm(model.external_force(state))) or 1.0
+def _step_load(model, state, lam: float) -> tuple[np.ndarray, float]:
+    """The external load lam f_ext(q) of a step and its norm: with the internal forces, the force scale of
+    the convergence tests (:func:`integrators.newton.newton_solve`; never an absolute number)."""
+    load = lam * model.external_force(state)
+    return load, float(np.linalg.norm(load))
 
 
 def _check_support(model) -> None:
@@ -94,6 +97,49 @@ def _mixed(model, settings: NewtonSettings) -> bool:
 def _with_stresses(model, state, settings: NewtonSettings):
     """The start of a step: under the mixed iteration, the state with the stresses of its strains."""
     return model.with_stresses(state) if _mixed(model, settings) else state
+
+
+def _scaled_size(model, dq: np.ndarray) -> float:
+    """max |dq_i / scale_i|: a correction in units of the model size (translations) and radians."""
+    return float(np.max(np.abs(dq / model.dof_scale)))
+
+
+def _arc_tolerance(settings: NewtonSettings, r: np.ndarray, f: np.ndarray, trial_lam: float, lam: float) -> float:
+    """The arc-length corrector's force tolerance, relative to the model's own forces (never an absolute
+    number): the external load of the step (at its start and at the iterate) and the iterate's internal
+    forces f_int = r + lam f."""
+    load = max(abs(trial_lam), abs(lam)) * float(np.linalg.norm(f))
+    return settings.rtol * max(load, float(np.linalg.norm(r + trial_lam * f)))
+
+
+def _arc_correction(solver: LinearSolver, r: np.ndarray, f: np.ndarray, Dq: np.ndarray,
+                    dl: float) -> tuple[np.ndarray, float]:
+    """Crisfield's corrector on the factorization held: dq = a + x b with K a = -r, K b = f, and x the
+    root of ||Dq + dq||^2 = dl^2 that keeps the step closest to its direction (the closest point if the
+    constraint has no root); returns (dq, x)."""
+    a = solver.solve(-r)
+    b = solver.solve(f)
+    u = Dq + a
+    c2, c1, c0 = b @ b, 2 * u @ b, u @ u - dl * dl
+    disc = c1 * c1 - 4 * c2 * c0
+    if disc < 0:  # no intersection: take the closest point
+        x = -c1 / (2 * c2)
+    else:
+        roots = [(-c1 + s * np.sqrt(disc)) / (2 * c2) for s in (1.0, -1.0)]
+        x = max(roots, key=lambda z: (Dq @ (u + z * b)))
+    return a + x * b, float(x)
+
+
+def _at_round_off_floor(model, solver: LinearSolver, r: np.ndarray, f: np.ndarray, Dq: np.ndarray, dl: float,
+                        settings: NewtonSettings) -> bool:
+    """Whether the corrector's next correction, on the factorization held (computed within lazy_tangent of
+    the iterate), is below ``increment_tol``: the residual is then at its round-off floor, which on a thin
+    shell can lie above the force tolerance (the arc-length twin of Newton's test)."""
+    try:
+        dq, _ = _arc_correction(solver, r, f, Dq, dl)
+    except (SingularMatrixError, FloatingPointError):
+        return False
+    return _scaled_size(model, dq) <= settings.increment_tol
 
 
 def load_control(model, load_factors=None, *, n_steps: int = 10, settings: NewtonSettings | None = None,
@@ -155,9 +201,9 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
             attempts += 1
             early = ""
             try:
-                reference = _reference_norm(model, state, trial)
+                load, reference = _step_load(model, state, trial)
             except FloatingPointError as exc:
-                reference, early = np.nan, str(exc)
+                load, reference, early = None, np.nan, str(exc)
             start, shift = _with_stresses(model, state, settings), None
             if np.isfinite(reference) and use_predictor and prev_increment is not None:
                 shift = min((trial - lam) / prev_dlam, MAX_EXTRAPOLATION) * prev_increment
@@ -176,7 +222,8 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
                 new_state, out = newton_solve(
                     start, lambda q: model.residual(q, trial), lambda q: model.residual_and_tangent(q, trial),
                     model.update, reference, settings, solver, stats, fresh_tangent=not reuse,
-                    dof_scale=model.dof_scale, conjugate=model.conjugate, held_lag=held_lag)
+                    dof_scale=model.dof_scale, conjugate=model.conjugate, held_lag=held_lag, load=load,
+                    min_iterations=1)
             held_lag = float("inf")
             if out is None or not out.converged:
                 if shift is not None:
@@ -301,8 +348,6 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
         trial_lam = lam + dlam
         held_lag = float("inf")
         ok, residuals, it, reason, non_finite, lazy = False, [], 0, "", False, False
-        ref = _reference_norm(model, state, max(abs(trial_lam), 1e-12))
-        tol = max(settings.rtol * ref, settings.atol)
         for it in range(1, settings.max_iterations + 1):
             try:
                 # near convergence (the last correction below lazy_tangent) the residual alone first
@@ -312,6 +357,7 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                     r, K = model.residual_and_tangent(trial, trial_lam)
                     stats.tangent_updates += 1
                 stats.residual_evaluations += 1
+                f = model.external_force(trial)
             except FloatingPointError as exc:
                 reason, non_finite = f"non-finite values at iteration {it}: {exc}", True
                 break
@@ -320,8 +366,12 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
             if not np.isfinite(norm):
                 reason, non_finite = f"non-finite residual at iteration {it}", True
                 break
-            if norm <= tol and it > 1:
+            if norm <= _arc_tolerance(settings, r, f, trial_lam, lam) and it > 1:
                 ok = True
+                break
+            if K is None and _at_round_off_floor(model, solver, r, f, Dq, dl, settings):
+                ok = True
+                residuals.append(float("nan"))   # its correction, on the factorization held, is round-off
                 break
             try:
                 if K is None:
@@ -331,28 +381,21 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                 solver.factorize(K)
                 stats.factorizations += 1
                 held_lag = 0.0
-                a = solver.solve(-r)
-                b = solver.solve(model.external_force(trial))
+                dq, x = _arc_correction(solver, r, f, Dq, dl)
             except (SingularMatrixError, FloatingPointError) as exc:
                 reason = str(exc)
                 held_lag = float("inf")
                 break
-            # ||Dq + a + x b||^2 = dl^2
-            u = Dq + a
-            c2, c1, c0 = b @ b, 2 * u @ b, u @ u - dl * dl
-            disc = c1 * c1 - 4 * c2 * c0
-            if disc < 0:  # no intersection: take the closest point
-                x = -c1 / (2 * c2)
-            else:
-                roots = [(-c1 + s * np.sqrt(disc)) / (2 * c2) for s in (1.0, -1.0)]
-                x = max(roots, key=lambda z: (Dq @ (u + z * b)))
-            dq = a + x * b
             trial = model.update(trial, dq)
             Dq = Dq + dq
             trial_lam += x
             stats.iterations += 1
-            size = float(np.max(np.abs(dq / model.dof_scale)))
+            size = _scaled_size(model, dq)
             held_lag += size
+            if size <= settings.increment_tol and it > 1:
+                ok = True                                  # the round-off floor reached (as in Newton)
+                residuals.append(float("nan"))
+                break
             lazy = size <= settings.lazy_tangent
         else:
             reason = f"no convergence in {settings.max_iterations} iterations"
@@ -366,11 +409,13 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
             continue
         if trial_lam >= lam_max:
             # finish exactly at lam_max under load control from the last converged state
+            load, reference = _step_load(model, trial, lam_max)
             state_end, out = newton_solve(
                 trial, lambda q: model.residual(q, lam_max), lambda q: model.residual_and_tangent(q, lam_max),
-                model.update, _reference_norm(model, trial, lam_max), settings, solver, stats,
+                model.update, reference, settings, solver, stats,
                 fresh_tangent=not held_lag <= settings.lazy_tangent, dof_scale=model.dof_scale,
-                conjugate=model.conjugate, held_lag=held_lag)
+                conjugate=model.conjugate, held_lag=held_lag, load=load,
+                min_iterations=int(trial_lam != lam_max))
             if out.converged:
                 rec = StepRecord(len(records) + 1, lam_max, out.iterations, out.residuals, time.perf_counter() - t0)
                 records.append(rec)
