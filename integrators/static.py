@@ -8,6 +8,7 @@ converged state.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 import time
 from typing import Callable
@@ -42,6 +43,7 @@ class FailureReport:
     attempts: int                      # attempts at this step (1 + its cut-backs, + 1 for a failed
                                        # secant-predicted start)
     non_finite: bool = False
+    limit_point: float | None = None   # load control: the load factor of the limit point that stopped it
 
 
 @dataclass
@@ -80,7 +82,10 @@ def _history(residuals) -> list[str]:
 
 
 def _failure_message(f: FailureReport) -> str:
-    return (f"step {f.step} to load factor {f.trial_load_factor:.6g} failed ({f.reason}) after {f.attempts} "
+    hint = "" if f.limit_point is None else (
+        f"limit point at load factor {f.limit_point:.6g}: load control cannot pass it (the tangent turns "
+        "singular along the load); use arc length (analysis method \"arc_length\"). ")
+    return hint + (f"step {f.step} to load factor {f.trial_load_factor:.6g} failed ({f.reason}) after {f.attempts} "
             f"attempt(s); residual history of the last attempt {_history(f.residuals)}; stopped at the last "
             f"converged load factor {f.load_factor:.6g} (state kept)")
 
@@ -104,6 +109,11 @@ def _scaled_size(model, dq: np.ndarray) -> float:
     return float(np.max(np.abs(dq / model.dof_scale)))
 
 
+def _scaled_norm(model, dq: np.ndarray) -> float:
+    """||dq / scale||: the length of an increment in units of the model size (translations) and radians."""
+    return float(np.linalg.norm(dq / model.dof_scale))
+
+
 def _arc_tolerance(settings: NewtonSettings, r: np.ndarray, f: np.ndarray, trial_lam: float, lam: float) -> float:
     """The arc-length corrector's force tolerance, relative to the model's own forces (never an absolute
     number): the external load of the step (at its start and at the iterate) and the iterate's internal
@@ -112,21 +122,22 @@ def _arc_tolerance(settings: NewtonSettings, r: np.ndarray, f: np.ndarray, trial
     return settings.rtol * max(load, float(np.linalg.norm(r + trial_lam * f)))
 
 
-def _arc_correction(solver: LinearSolver, r: np.ndarray, f: np.ndarray, Dq: np.ndarray,
-                    dl: float) -> tuple[np.ndarray, float]:
+def _arc_correction(solver: LinearSolver, r: np.ndarray, f: np.ndarray, Dq: np.ndarray, dl: float,
+                    scale) -> tuple[np.ndarray, float]:
     """Crisfield's corrector on the factorization held: dq = a + x b with K a = -r, K b = f, and x the
-    root of ||Dq + dq||^2 = dl^2 that keeps the step closest to its direction (the closest point if the
-    constraint has no root); returns (dq, x)."""
+    root of ||(Dq + dq) / scale||^2 = dl^2 that keeps the step closest to its direction (the closest point
+    if the constraint has no root); returns (dq, x). The arc is measured in units of the model size
+    (translations) and radians (``scale``, the DoF scale): the same path in any units."""
     a = solver.solve(-r)
     b = solver.solve(f)
-    u = Dq + a
-    c2, c1, c0 = b @ b, 2 * u @ b, u @ u - dl * dl
+    u, bs, Ds = (Dq + a) / scale, b / scale, Dq / scale
+    c2, c1, c0 = bs @ bs, 2 * u @ bs, u @ u - dl * dl
     disc = c1 * c1 - 4 * c2 * c0
     if disc < 0:  # no intersection: take the closest point
         x = -c1 / (2 * c2)
     else:
         roots = [(-c1 + s * np.sqrt(disc)) / (2 * c2) for s in (1.0, -1.0)]
-        x = max(roots, key=lambda z: (Dq @ (u + z * b)))
+        x = max(roots, key=lambda z: (Ds @ (u + z * bs)))
     return a + x * b, float(x)
 
 
@@ -136,10 +147,48 @@ def _at_round_off_floor(model, solver: LinearSolver, r: np.ndarray, f: np.ndarra
     the iterate), is below ``increment_tol``: the residual is then at its round-off floor, which on a thin
     shell can lie above the force tolerance (the arc-length twin of Newton's test)."""
     try:
-        dq, _ = _arc_correction(solver, r, f, Dq, dl)
+        dq, _ = _arc_correction(solver, r, f, Dq, dl, model.dof_scale)
     except (SingularMatrixError, FloatingPointError):
         return False
     return _scaled_size(model, dq) <= settings.increment_tol
+
+
+def _load_compliance(model, state, lam: float) -> float:
+    """c = f . K^-1 f at an equilibrium (f paired with the increment by virtual work, ``model.conjugate``):
+    the compliance of the load path, dW/dlam per unit load. It grows without bound at a limit point,
+    where the tangent turns singular along the load, and changes sign beyond it (at a bifurcation, where the
+    buckling mode is orthogonal to the load, it stays bounded)."""
+    if getattr(state, "stress", None) is not None:
+        state = dataclasses.replace(state, stress=None)   # the tangent itself, not a mixed iteration matrix
+    _, K = model.residual_and_tangent(state, lam)
+    solver = LinearSolver()
+    solver.factorize(K)
+    f = model.external_force(state)
+    v = solver.solve(f)
+    conjugate = getattr(model, "conjugate", None)
+    return float((conjugate(state, v) if conjugate is not None else v) @ f)
+
+
+def _limit_point(model, previous, last, trial: float) -> float | None:
+    """The load factor of a limit point that stops load control in the step from ``last`` to ``trial``, or
+    None if the failure has another cause.
+
+    ``previous`` and ``last`` are the last two converged (state, load factor). Near a limit point lam_L the
+    path is lam_L - lam ~ s^2 along its arc length s, so the compliance c = f . K^-1 f grows like
+    (lam_L - lam)^(-1/2): 1 / c^2 falls linearly to 0 at lam_L. Extrapolated from the two points, a limit
+    point is reported if it lies before the failed trial (one more step's length of slack for the
+    extrapolation).
+    """
+    (q0, lam0), (q1, lam1) = previous, last
+    try:
+        c0, c1 = _load_compliance(model, q0, lam0), _load_compliance(model, q1, lam1)
+    except (FloatingPointError, SingularMatrixError):
+        return None
+    if not (c1 > c0 > 0 and lam1 > lam0):
+        return None
+    g0, g1 = 1.0 / c0**2, 1.0 / c1**2
+    lam_limit = lam1 + (lam1 - lam0) * g1 / (g0 - g1)
+    return lam_limit if lam_limit <= trial + (trial - lam1) else None
 
 
 def load_control(model, load_factors=None, *, n_steps: int = 10, settings: NewtonSettings | None = None,
@@ -194,6 +243,7 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
     attempts = 0
     held_lag = float("inf")            # distance of the state from the factorization held (scaled increments)
     prev_increment, prev_dlam, use_predictor = None, 0.0, predictor == "secant"
+    previous = None                    # the converged (state, load factor) before the last one
     for target in targets:
         while lam < target - 1e-14:
             # land exactly on the prescribed level (no sliver step, no level missed by round-off)
@@ -242,8 +292,10 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
                 if step < min_step or not adaptive or at_start:
                     if at_start:
                         reason += "; non-finite at the start of the step, from the last converged state: stopped at once"
+                    limit = None if at_start or previous is None else _limit_point(model, previous, (state, lam),
+                                                                                      trial)
                     failure = FailureReport(len(records) + 1, lam, trial, list(residuals), reason, attempts,
-                                            non_finite)
+                                            non_finite, limit)
                     return StaticResult(state, lam, records, stats, False, _failure_message(failure),
                                         time.perf_counter() - t0, cutbacks, failure)
                 continue
@@ -253,6 +305,7 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
                 if shift is not None:
                     increment = shift if increment is None else shift + increment
                 prev_increment, prev_dlam, use_predictor = increment, trial - lam, True
+            previous = (state, lam)
             state, lam = new_state, trial
             rec = StepRecord(len(records) + 1, lam, out.iterations, out.residuals, time.perf_counter() - t0)
             records.append(rec)
@@ -268,7 +321,7 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
 
 def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, max_steps: int = 500,
                settings: NewtonSettings | None = None, min_increment_ratio: float = 1e-3,
-               max_increment_ratio: float = 4.0, desired_iterations: int = 5,
+               max_increment_ratio: float = 25.0, desired_iterations: int = 5,
                max_load_increment: float | None = None,
                on_step: Callable | None = None, state=None) -> StaticResult:
     """Crisfield's cylindrical arc-length method: ||Delta q|| = Delta l in each step.
@@ -317,9 +370,9 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
         return stop(0.0, [], f"non-finite values in the initial state or loads: {exc}", True)
     if not np.any(f0):
         raise ValueError("arc-length needs a nonzero external load (the external force vector is zero)")
-    dl = initial_increment * float(np.linalg.norm(dq_f))
+    dl = initial_increment * _scaled_norm(model, dq_f)    # arc lengths in units of the model size and radians
     dl0 = dl
-    prev_dir = dq_f / np.linalg.norm(dq_f)
+    prev_dir = dq_f / model.dof_scale / _scaled_norm(model, dq_f)
     prev_dlam_sign = 1.0
 
     for _ in range(max_steps):
@@ -338,8 +391,8 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
             return stop(lam, [], f"non-finite values at the last converged state: {exc}; stopped at once", True)
         except SingularMatrixError as exc:
             return stop(lam, [], f"predictor: {exc}")
-        sign = np.sign(dq_f @ prev_dir) or prev_dlam_sign
-        dlam = sign * dl / np.linalg.norm(dq_f)
+        sign = np.sign(dq_f / model.dof_scale @ prev_dir) or prev_dlam_sign
+        dlam = sign * dl / _scaled_norm(model, dq_f)
         if max_load_increment is not None and abs(dlam) > max_load_increment:
             dl *= max_load_increment / abs(dlam)
             dlam = sign * max_load_increment
@@ -381,7 +434,7 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                 solver.factorize(K)
                 stats.factorizations += 1
                 held_lag = 0.0
-                dq, x = _arc_correction(solver, r, f, Dq, dl)
+                dq, x = _arc_correction(solver, r, f, Dq, dl, model.dof_scale)
             except (SingularMatrixError, FloatingPointError) as exc:
                 reason = str(exc)
                 held_lag = float("inf")
@@ -430,7 +483,7 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                 return stop(lam_max, out.residuals, f"final step to lam_max: {out.reason}", out.non_finite)
             continue
         attempts = 0
-        prev_dir = Dq / np.linalg.norm(Dq)
+        prev_dir = Dq / model.dof_scale / _scaled_norm(model, Dq)
         prev_dlam_sign = np.sign(trial_lam - lam) or prev_dlam_sign
         state, lam = trial, trial_lam
         rec = StepRecord(len(records) + 1, lam, it, residuals, time.perf_counter() - t0)
