@@ -82,6 +82,14 @@ class NewtonOutcome:
     factorizations: int = 0       # made in this solve
 
 
+def work_norm(r: np.ndarray, dof_scale=1.0) -> float:
+    """||r * dof_scale||: a residual (or force) weighted by the DoF scale -- forces times the model size,
+    moments times 1 rad -- so that forces and moments add up in one unit (the virtual work per unit scaled
+    DoF). Every force test of the static solvers is in this norm: a model in other units (lengths times s,
+    forces times s^2, moments times s^3) has the same relative residuals."""
+    return float(np.linalg.norm(r * dof_scale))
+
+
 def _first_non_finite(r: np.ndarray) -> str:
     bad = np.flatnonzero(~np.isfinite(r))
     return f"first at equation {int(bad[0])}" if bad.size else "its norm overflows"
@@ -94,11 +102,11 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
                  load: np.ndarray | None = None, min_iterations: int = 0):
     """Solve r(q) = 0 from ``state``; returns (state, outcome). Never returns a non-finite state.
 
-    Converged when ||r|| <= rtol * reference, or when an increment scaled by ``dof_scale`` (a length for
+    Converged when ||r|| <= rtol * reference (norms weighted by ``dof_scale``, :func:`work_norm`), or when an increment scaled by ``dof_scale`` (a length for
     translations, 1 for rotations) is below ``increment_tol``: the residual has then reached its round-off
     floor, which for thin shells (membrane stiffness >> bending load) can lie above rtol. The reference is
     the model's own force scale, never an absolute number: ``reference_norm`` (the norm of the step's
-    external load) or, with ``load`` (that external load vector, r = f_int - load), the norm of the
+    external load, weighted likewise) or, with ``load`` (that external load vector, r = f_int - load), the norm of the
     iterate's internal forces f_int = r + load if larger. So the tests are scale-free: a model in other
     units (forces, lengths) takes the same iterations. A step whose load changed needs at least
     ``min_iterations`` corrections (1: never "converged" without moving).
@@ -147,7 +155,7 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
             outcome.reason = f"non-finite values at iteration {it}: {exc}"
             outcome.non_finite, outcome.iterations = True, it
             return state, outcome
-        norm = float(np.linalg.norm(r))
+        norm = work_norm(r, dof_scale)
         if not np.isfinite(norm):
             outcome.reason = f"non-finite residual at iteration {it} ({_first_non_finite(r)})"
             outcome.non_finite, outcome.iterations = True, it
@@ -156,7 +164,7 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
             outcome.residuals.append(norm)
         reevaluated = False
         if load is not None:
-            tol = settings.rtol * max(reference_norm, float(np.linalg.norm(r + load)))
+            tol = settings.rtol * max(reference_norm, work_norm(r + load, dof_scale))
         if norm <= tol and it >= min_iterations:
             outcome.converged = True
             outcome.iterations = it
@@ -217,7 +225,7 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
                 r_new = None
             stats.residual_evaluations += 1
         finite = r_new is not None and bool(np.all(np.isfinite(r_new)))
-        norm_new = float(np.linalg.norm(r_new)) if finite else float("inf")
+        norm_new = work_norm(r_new, dof_scale) if finite else float("inf")
         # modified Newton, and full Newton on a factorization computed within lazy_tangent: keep it while
         # the residual contracts (a converged residual is reported by the next iteration)
         need_tangent = not (norm_new <= tol or norm_new < settings.refresh_ratio * norm)

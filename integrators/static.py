@@ -16,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 from integrators.linear import LinearSolver, SingularMatrixError
-from integrators.newton import NewtonSettings, NewtonStats, newton_solve
+from integrators.newton import NewtonSettings, NewtonStats, newton_solve, work_norm
 
 
 @dataclass
@@ -66,7 +66,7 @@ def _step_load(model, state, lam: float) -> tuple[np.ndarray, float]:
     """The external load lam f_ext(q) of a step and its norm: with the internal forces, the force scale of
     the convergence tests (:func:`integrators.newton.newton_solve`; never an absolute number)."""
     load = lam * model.external_force(state)
-    return load, float(np.linalg.norm(load))
+    return load, work_norm(load, model.dof_scale)
 
 
 def _check_support(model) -> None:
@@ -104,6 +104,28 @@ def _with_stresses(model, state, settings: NewtonSettings):
     return model.with_stresses(state) if _mixed(model, settings) else state
 
 
+ARC_LENGTH_OPTIONS = ("max_steps", "min_increment_ratio", "max_increment_ratio", "desired_iterations")
+
+
+def check_arc_length_options(**options) -> dict:
+    """Check the step-length controls of :func:`arc_length` (``ARC_LENGTH_OPTIONS``; a scene's
+    ``[analysis]`` keys of the same names) and return them; a ValueError names the first bad one."""
+    for name, value in options.items():
+        integer = name in ("max_steps", "desired_iterations")
+        if name not in ARC_LENGTH_OPTIONS:
+            raise ValueError(f"unknown arc-length option {name!r}; options: {', '.join(ARC_LENGTH_OPTIONS)}")
+        if integer and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1):
+            raise ValueError(f"arc-length {name} must be an integer >= 1, got {value!r}")
+        if not integer and (isinstance(value, bool) or not isinstance(value, (int, float))
+                            or not np.isfinite(value)):
+            raise ValueError(f"arc-length {name} must be a finite number, got {value!r}")
+        if name == "min_increment_ratio" and not 0 < value < 1:
+            raise ValueError(f"arc-length min_increment_ratio must lie in (0, 1), got {value!r}")
+        if name == "max_increment_ratio" and not value >= 1:
+            raise ValueError(f"arc-length max_increment_ratio must be >= 1, got {value!r}")
+    return options
+
+
 def _scaled_size(model, dq: np.ndarray) -> float:
     """max |dq_i / scale_i|: a correction in units of the model size (translations) and radians."""
     return float(np.max(np.abs(dq / model.dof_scale)))
@@ -114,12 +136,13 @@ def _scaled_norm(model, dq: np.ndarray) -> float:
     return float(np.linalg.norm(dq / model.dof_scale))
 
 
-def _arc_tolerance(settings: NewtonSettings, r: np.ndarray, f: np.ndarray, trial_lam: float, lam: float) -> float:
+def _arc_tolerance(settings: NewtonSettings, r: np.ndarray, f: np.ndarray, trial_lam: float, lam: float,
+                   scale) -> float:
     """The arc-length corrector's force tolerance, relative to the model's own forces (never an absolute
     number): the external load of the step (at its start and at the iterate) and the iterate's internal
-    forces f_int = r + lam f."""
-    load = max(abs(trial_lam), abs(lam)) * float(np.linalg.norm(f))
-    return settings.rtol * max(load, float(np.linalg.norm(r + trial_lam * f)))
+    forces f_int = r + lam f, in the norm weighted by the DoF scale (:func:`integrators.newton.work_norm`)."""
+    load = max(abs(trial_lam), abs(lam)) * work_norm(f, scale)
+    return settings.rtol * max(load, work_norm(r + trial_lam * f, scale))
 
 
 def _arc_correction(solver: LinearSolver, r: np.ndarray, f: np.ndarray, Dq: np.ndarray, dl: float,
@@ -345,6 +368,10 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
     if not (np.isfinite(lam_max) and lam_max > 0 and np.isfinite(initial_increment) and initial_increment > 0):
         raise ValueError(f"arc-length needs lam_max > 0 and initial_increment > 0, got {lam_max!r} and "
                          f"{initial_increment!r}")
+    if max_load_increment is not None and not (np.isfinite(max_load_increment) and max_load_increment > 0):
+        raise ValueError(f"arc-length max_load_increment must be > 0, got {max_load_increment!r}")
+    check_arc_length_options(max_steps=max_steps, min_increment_ratio=min_increment_ratio,
+                             max_increment_ratio=max_increment_ratio, desired_iterations=desired_iterations)
     _check_support(model)
     state = model.initial_state() if state is None else state
     solver, stats = LinearSolver(), NewtonStats(iteration="mixed" if _mixed(model, settings) else "displacement")
@@ -414,12 +441,12 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
             except FloatingPointError as exc:
                 reason, non_finite = f"non-finite values at iteration {it}: {exc}", True
                 break
-            norm = float(np.linalg.norm(r))
+            norm = work_norm(r, model.dof_scale)
             residuals.append(norm)
             if not np.isfinite(norm):
                 reason, non_finite = f"non-finite residual at iteration {it}", True
                 break
-            if norm <= _arc_tolerance(settings, r, f, trial_lam, lam) and it > 1:
+            if norm <= _arc_tolerance(settings, r, f, trial_lam, lam, model.dof_scale) and it > 1:
                 ok = True
                 break
             if K is None and _at_round_off_floor(model, solver, r, f, Dq, dl, settings):
