@@ -48,7 +48,8 @@ class NewtonSettings:
         if self.policy not in ("full", "modified"):
             raise ValueError(f"Newton policy must be 'full' or 'modified', got {self.policy!r}")
         if not 0 < self.rtol < 1:
-            raise ValueError(f"Newton rtol must lie in (0, 1) (a fraction of the reference force), got {self.rtol!r}")
+            raise ValueError(f"Newton rtol must lie in (0, 1) (a fraction of the reference force), "
+                             f"got {self.rtol!r}")
         if not self.max_iterations >= 1:
             raise ValueError(f"Newton max_iterations must be >= 1, got {self.max_iterations!r}")
         if not isinstance(self.mixed, bool):
@@ -102,14 +103,15 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
                  load: np.ndarray | None = None, min_iterations: int = 0):
     """Solve r(q) = 0 from ``state``; returns (state, outcome). Never returns a non-finite state.
 
-    Converged when ||r|| <= rtol * reference (norms weighted by ``dof_scale``, :func:`work_norm`), or when an increment scaled by ``dof_scale`` (a length for
-    translations, 1 for rotations) is below ``increment_tol``: the residual has then reached its round-off
-    floor, which for thin shells (membrane stiffness >> bending load) can lie above rtol. The reference is
-    the model's own force scale, never an absolute number: ``reference_norm`` (the norm of the step's
-    external load, weighted likewise) or, with ``load`` (that external load vector, r = f_int - load), the norm of the
-    iterate's internal forces f_int = r + load if larger. So the tests are scale-free: a model in other
-    units (forces, lengths) takes the same iterations. A step whose load changed needs at least
-    ``min_iterations`` corrections (1: never "converged" without moving).
+    Converged when ||r|| <= rtol * reference (norms weighted by ``dof_scale``, :func:`work_norm`), or when
+    an increment scaled by ``dof_scale`` (a length for translations, 1 for rotations) is below
+    ``increment_tol``: the residual has then reached its round-off floor, which for thin shells (membrane
+    stiffness >> bending load) can lie above rtol. The reference is the model's own force scale, never an
+    absolute number: ``reference_norm`` (the weighted norm of the step's external load) or, with ``load``
+    (that external load vector, r = f_int - load), the norm of the iterate's internal forces f_int = r + load
+    if larger. So the tests are scale-free: a model in other units (forces, lengths) takes the same
+    iterations. A step whose load changed needs at least ``min_iterations`` corrections (1: never
+    "converged" without moving).
     ``solver`` may hold a factorization from earlier iterations or steps: it serves the first iteration
     unless ``fresh_tangent`` (the static solvers pass False under the "full" policy only when it was
     computed within ``lazy_tangent`` of the start: the last iterates of the previous step); ``held_lag`` is

@@ -241,6 +241,9 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
     computed within ``settings.lazy_tangent`` of the converged state (the last iterates of a converged
     step): the first correction is then the tangent predictor to a relative O(lazy_tangent), for a
     tangent that does not depend on the load factor (dead forces), and a modified-Newton step otherwise.
+
+    A run that stops at a limit point says so (``FailureReport.limit_point``, :func:`_limit_point`): "limit
+    point at load factor X: ...; use arc length".
     """
     settings = settings or NewtonSettings()
     targets = np.linspace(0, 1, n_steps + 1)[1:] if load_factors is None else np.asarray(load_factors, float)
@@ -315,8 +318,9 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
                 if step < min_step or not adaptive or at_start:
                     if at_start:
                         reason += "; non-finite at the start of the step, from the last converged state: stopped at once"
-                    limit = None if at_start or previous is None else _limit_point(model, previous, (state, lam),
-                                                                                      trial)
+                    limit = None
+                    if not at_start and previous is not None:
+                        limit = _limit_point(model, previous, (state, lam), trial)
                     failure = FailureReport(len(records) + 1, lam, trial, list(residuals), reason, attempts,
                                             non_finite, limit)
                     return StaticResult(state, lam, records, stats, False, _failure_message(failure),
@@ -347,14 +351,22 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                max_increment_ratio: float = 25.0, desired_iterations: int = 5,
                max_load_increment: float | None = None,
                on_step: Callable | None = None, state=None) -> StaticResult:
-    """Crisfield's cylindrical arc-length method: ||Delta q|| = Delta l in each step.
+    """Crisfield's cylindrical arc-length method: ||Delta q / scale|| = Delta l in each step.
 
     The first step's arc length follows from a load increment ``initial_increment``. Each iteration solves
     K dq_r = -r and K dq_f = f_ext and picks the load correction from the quadratic constraint, taking the
     root closest to the previous direction (this follows snap-through and snap-back). The step length adapts
-    to ``desired_iterations``; ``max_load_increment`` caps the load-factor change of a step (a dense record
-    of the path). The run ends when lam reaches ``lam_max``: the last step is then solved under load
-    control at exactly lam_max.
+    to ``desired_iterations``, between ``min_increment_ratio`` (below it the run stops with a report) and
+    ``max_increment_ratio`` times the first arc; ``max_load_increment`` caps the load-factor change of a step
+    (a dense record of the path). The run ends when lam reaches ``lam_max`` (the last step is then solved
+    under load control at exactly lam_max) or after ``max_steps`` steps (``ARC_LENGTH_OPTIONS``, all
+    settable from a scene file).
+
+    The arc is measured in units of the model size (translations) and radians (``model.dof_scale``), and the
+    corrector stops on the tests of :func:`integrators.newton.newton_solve`: the force residual relative to
+    the model's own forces, or a correction below ``settings.increment_tol`` -- the round-off floor, which
+    on a thin shell lies above the force tolerance (tested on the factorization held before a new tangent
+    is made, as in Newton).
 
     The predictor solves on the factorization left by the last iterates of the previous step when that was
     computed within ``settings.lazy_tangent`` of the converged state (else on a fresh tangent there), and an

@@ -103,3 +103,53 @@ def test_rtol_of_one_or_more_is_refused(rtol):
         NewtonSettings(rtol=rtol)
     with pytest.raises(ValueError, match=f"rtol must lie in \\(0, 1\\).*got {rtol!r}"):
         AlphaSettings(rtol=rtol)
+
+
+class Duffing:
+    """Two nonlinear oscillators, m x'' + k x (1 + (x / l)^2) = 0, in units where lengths are s times larger
+    (l, x) and forces s times larger (k unchanged, m unchanged: times in the same unit)."""
+
+    def __init__(self, s):
+        self.s, self.mass, self.n_dof = s, np.ones(2), 2
+        self.k = np.array([1.0, 40.0])
+        self.dof_scale = np.array([s, s])          # the model size: lengths in units of l = s
+
+    def residual(self, q, vdot, t):
+        return self.mass * vdot + self.k * q * (1 + (q / self.s) ** 2)
+
+    def residual_and_tangent(self, q, vdot, t):
+        import scipy.sparse as sp
+        return self.residual(q, vdot, t), sp.diags(self.k * (1 + 3 * (q / self.s) ** 2)).tocsc()
+
+    def update(self, q, dq):
+        return q + dq
+
+    def initial_acceleration(self, q, t=0.0):
+        return -self.k * q * (1 + (q / self.s) ** 2) / self.mass
+
+    def kinetic_energy(self, v):
+        return 0.5 * float(v @ v)
+
+    def strain_energy(self, q):
+        return 0.0
+
+    def gravity_potential(self, q):
+        return 0.0
+
+    def momenta(self, q, v):
+        return np.zeros(3), np.zeros(3)
+
+
+def test_generalized_alpha_convergence_is_scale_free():
+    """Its test (a weighted RMS of the corrections, atol times the DoF scale) was already relative: the same
+    motion in micrometres and kilometres takes the same iterations (an audit, issue 14)."""
+    from integrators.generalized_alpha import generalized_alpha
+    runs = {}
+    for s in (1e-6, 1.0, 1e3):
+        dyn = Duffing(s)
+        out = generalized_alpha(dyn, 2.0, 0.05, state=np.array([0.8, 0.3]) * s)
+        assert out.converged, out.message
+        runs[s] = (out.state / s, [r.iterations for r in out.records])
+    for s in (1e-6, 1e3):
+        np.testing.assert_allclose(runs[s][0], runs[1.0][0], rtol=1e-9)
+        assert runs[s][1] == runs[1.0][1]
