@@ -241,7 +241,8 @@ class Model:
         blocks[:, 3:, 3:] = hat_many(Ml)
         press = []
         for p in self.pressures:
-            F, dF, elems = pressure_contribution(self.body.mesh, state.x, p.pressure, p.elements)
+            F, dF, elems = pressure_contribution(self.body.mesh, self.body.relative_positions(state), p.pressure,
+                                                 p.elements)
             Fl = np.einsum("nji,nj->ni", R, F)
             f[:, :3] += Fl
             blocks[:, :3, 3:] += hat_many(Fl)

@@ -137,13 +137,17 @@ class Reference:
 
 @dataclass(frozen=True)
 class StaticAnalysis:
-    """method: "load_control" (steps to the listed load factors) or "arc_length"."""
+    """method: "load_control" (steps to the listed load factors) or "arc_length"; ``arc_options``: the
+    arc-length step-length controls (``integrators.static.ARC_LENGTH_OPTIONS``: ``max_steps``,
+    ``min_increment_ratio``, ``max_increment_ratio``, ``desired_iterations``) that differ from the defaults
+    of :func:`integrators.static.arc_length`."""
 
     method: str = "load_control"
     load_factors: tuple[float, ...] = tuple(np.linspace(0.05, 1.0, 20))
     arc_increment: float = 0.05
     max_load_increment: float | None = None
     newton: NewtonSettings = field(default_factory=NewtonSettings)
+    arc_options: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True, eq=False)
@@ -501,7 +505,8 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
             result = load_control(model, a.load_factors, settings=a.newton, on_step=record)
         else:
             result = arc_length(model, lam_max=max(a.load_factors), initial_increment=a.arc_increment,
-                                max_load_increment=a.max_load_increment, settings=a.newton, on_step=record)
+                                max_load_increment=a.max_load_increment, settings=a.newton, on_step=record,
+                                **a.arc_options)
     wall = time.perf_counter() - t0
     errors = compare_with_reference(history, scene.reference) if scene.reference else []
     return RunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, history, errors, wall,

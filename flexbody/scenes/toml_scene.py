@@ -66,7 +66,7 @@ _SECTIONS = ("name", "description", "mesh", "material", "element", "bc", "load",
 _SELECTORS = ("set", "nodes", "near", "plane", "ring")
 _MATERIAL_KEYS = ("young", "poisson", "thickness", "density", "shear_correction")
 _ANALYSIS_KEYS = ("method", "steps", "max_load_factor", "load_factors", "arc_increment", "max_load_increment",
-                  "newton")
+                  "max_steps", "min_increment_ratio", "max_increment_ratio", "desired_iterations", "newton")
 _DYNAMIC_KEYS = ("type", "dt", "end_time", "rho_inf", "policy", "output_every", "gravity", "load_ramp_time",
                  "initial", "hub", "integrator")
 _OUTPUT_TYPES = ("displacement", "radial", "angular_velocity")
@@ -579,6 +579,7 @@ def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None) -> Dy
 
 
 def _build_analysis(t: _Table) -> StaticAnalysis:
+    from integrators.static import ARC_LENGTH_OPTIONS, check_arc_length_options
     if t.has("type"):
         t.string("type", choices=("static", "dynamic"))
     method = t.string("method", "load_control", choices=("load_control", "arc_length"))
@@ -601,8 +602,12 @@ def _build_analysis(t: _Table) -> StaticAnalysis:
         return StaticAnalysis("load_control", tuple(lf), newton=newton)
     arc = t.number("arc_increment", 0.05, positive=True)
     cap = t.number("max_load_increment", None, positive=True)
-    t.done(["type", "method", "max_load_factor", "arc_increment", "max_load_increment", "newton"])
-    return StaticAnalysis("arc_length", (lam_max,), arc, cap, newton)
+    options = {k: t.integer(k) if k in ("max_steps", "desired_iterations") else t.number(k)
+               for k in ARC_LENGTH_OPTIONS if t.has(k)}
+    _wrap(t.where, "analysis", check_arc_length_options, **options)
+    t.done(["type", "method", "max_load_factor", "arc_increment", "max_load_increment", *ARC_LENGTH_OPTIONS,
+            "newton"])
+    return StaticAnalysis("arc_length", (lam_max,), arc, cap, newton, options)
 
 
 def _build_outputs(tables: list[_Table], mesh, dynamic: bool = False) -> list:
