@@ -72,6 +72,11 @@ def rigid_field(positions: np.ndarray, angular_velocity, center=None,
 RADIAL_SHAPES = ("uniform", "linear", "quadratic")
 
 
+def _shown(value) -> str:
+    """A value for an error message (arrays as lists)."""
+    return repr(value.tolist() if isinstance(value, np.ndarray) else value)
+
+
 def polar_coordinates(positions: np.ndarray, center=(0.0, 0.0, 0.0),
                       axis=(0.0, 0.0, 1.0)) -> tuple[np.ndarray, np.ndarray]:
     """Distance r from the axis through ``center`` and angle theta about it, of points (n, 3).
@@ -81,7 +86,7 @@ def polar_coordinates(positions: np.ndarray, center=(0.0, 0.0, 0.0),
     """
     n = np.asarray(axis, dtype=float)
     if n.shape != (3,) or not np.all(np.isfinite(n)) or not np.abs(n).max() > 0:
-        raise ValueError(f"axis must be a finite nonzero 3-vector, got {axis!r}")
+        raise ValueError(f"axis must be a finite nonzero 3-vector, got {_shown(axis)}")
     n = n / np.abs(n).max()
     n = n / np.linalg.norm(n)
     ref = np.eye(3)[0] if abs(n[0]) < 0.9 else np.eye(3)[1]
@@ -133,7 +138,7 @@ def modal_velocity_field(positions: np.ndarray, direction, amplitude: float, rad
     x = np.asarray(positions, dtype=float)
     d = np.asarray(direction, dtype=float)
     if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.abs(d).max() > 0:
-        raise ValueError(f"direction must be a finite nonzero 3-vector, got {direction!r}")
+        raise ValueError(f"direction must be a finite nonzero 3-vector, got {_shown(direction)}")
     d = d / np.abs(d).max()
     d = d / np.linalg.norm(d)
     if isinstance(amplitude, bool) or not np.isfinite(amplitude):

@@ -332,3 +332,16 @@ def test_the_kicked_example_runs_a_few_steps_and_moves_out_of_plane():
     w = np.asarray(summary.history["w_rim_0"])
     assert w[0] == 0.0 and abs(w[-1]) > 0.5 * 0.05 * 4 * summary.history["time"][1]   # moving at ~4 x 0.05 m/s
     assert np.ptp(summary.history["u_r_rim"]) < 0.05 * abs(summary.history["u_r_rim"][0])   # the spin's stretch
+
+
+def test_the_exudyn_adapter_refuses_point_masses(tmp_path):
+    """The ANCF counterpart has no point masses: a free spinning plate with one is refused, not run without it."""
+    from dataclasses import replace
+
+    from flexbody.adapters.exudyn import _rigid_field
+    from flexbody.scenes import build
+    scene = build("spinning_plate")
+    _rigid_field(scene)                                       # the plain plate has a counterpart
+    heavy = replace(scene, analysis=replace(scene.analysis, point_masses=(PointMass([0], 1.0),)))
+    with pytest.raises(ValueError, match="without point masses"):
+        _rigid_field(heavy)
