@@ -97,6 +97,16 @@ def test_load_groups_refuse_a_wrong_count_of_factors_or_groups():
         grouped.residual(grouped.initial_state(), [1.0, np.nan])
 
 
+def test_loads_that_cancel_at_factor_one_may_sit_in_different_groups():
+    """Equal and opposite forces on a free node with different time functions do not cancel in time: the
+    model's check of loads on constrained DoFs takes each group on its own."""
+    dyn = hub_annulus()
+    tip = dyn.model.body.mesh.nearest_node([B, 0.0, 0.0])
+    loads = [NodalLoad([tip], force=[0, 0, 1.0]), NodalLoad([tip], force=[0, 0, -1.0])]
+    model = Model(dyn.model.body, dyn.model.constraints, loads, load_groups=(0, 1))
+    assert np.abs(model.external_force(model.initial_state(), [1.0, 0.0])).max() == 1.0
+
+
 # -- point masses ----------------------------------------------------------------------------------------
 def test_a_tip_mass_on_a_spinning_annulus_is_its_centrifugal_force():
     """The steady spin includes the point mass: its rim stretch is that of the same annulus without it under the
