@@ -64,12 +64,17 @@ class Model:
     body : the shell body
     constraints : Fix and Symmetry conditions
     loads : NodalLoad and FollowerPressure loads (all scaled by the load factor)
+    load_groups : the group k = 0 .. G-1 of each load (None: all in group 0). The load factor ``lam`` of
+        :meth:`residual` and :meth:`residual_and_tangent` is then a number (every group scaled by it) or the
+        G factors lambda_k of the groups: r = f_int - sum_k lambda_k f_ext,k, the tangent exact for each
+        (dead, follower and pressure loads alike; each group's load and tangent blocks are linear in lambda_k).
     """
 
     body: ShellBody
     constraints: list = field(default_factory=list)
     loads: list = field(default_factory=list)
     counters: Counters = field(default_factory=Counters)
+    load_groups: tuple[int, ...] | None = None
 
     def __post_init__(self) -> None:
         n = self.body.n_nodes
@@ -163,15 +168,29 @@ class Model:
                              f"constraint direction on the same node (not orthogonal to it)")
         self.fixed[i, k] = True
 
+    def _check_load_groups(self) -> np.ndarray:
+        """The group of each load (n_loads,), checked: integers 0 .. G-1, one per load."""
+        if self.load_groups is None:
+            return np.zeros(len(self.loads), dtype=int)
+        groups = list(self.load_groups)
+        if len(groups) != len(self.loads) or not all(isinstance(g, (int, np.integer)) and not isinstance(g, bool)
+                                                     and g >= 0 for g in groups):
+            raise ModelError(f"load_groups must give one group index >= 0 per load ({len(self.loads)} loads), "
+                             f"got {self.load_groups!r}")
+        return np.asarray(groups, dtype=int)
+
     def _collect_loads(self) -> None:
         n = self.body.n_nodes
-        self.dead = np.zeros((n, 6))      # global force, moment
-        self.follower = np.zeros((n, 6))  # local force, moment
+        groups = self._check_load_groups()
+        self.n_load_groups = int(groups.max()) + 1 if groups.size else 1
+        self._group_dead = np.zeros((self.n_load_groups, n, 6))      # global force, moment per group
+        self._group_follower = np.zeros((self.n_load_groups, n, 6))  # local force, moment per group
         self.pressures: list[FollowerPressure] = []
-        for load in self.loads:
+        self._pressure_groups: list[int] = []
+        for load, group in zip(self.loads, groups):
             if isinstance(load, NodalLoad):
                 self._check_nodes(load.nodes, "load")
-                target = self.follower if load.follower else self.dead
+                target = self._group_follower[group] if load.follower else self._group_dead[group]
                 np.add.at(target, load.nodes, np.concatenate([load.force, load.moment]))
             elif isinstance(load, FollowerPressure):
                 try:
@@ -187,9 +206,24 @@ class Model:
                             or elems.max() >= m:
                         raise ModelError(f"pressure elements must be indices in 0..{m - 1}, got {load.elements!r}")
                 self.pressures.append(load)
+                self._pressure_groups.append(int(group))
             else:
                 raise ModelError(f"unknown load type {type(load).__name__}")
+        self.dead = self._group_dead.sum(axis=0)           # all groups at factor 1
+        self.follower = self._group_follower.sum(axis=0)
         self._check_loads_on_constrained()
+
+    def group_factors(self, lam) -> np.ndarray:
+        """The factors (G,) of the load groups: ``lam`` for every group, or ``lam`` itself if it has G entries."""
+        factors = np.asarray(lam, dtype=float)
+        if factors.ndim == 0:
+            factors = np.full(self.n_load_groups, float(factors))
+        if factors.shape != (self.n_load_groups,):
+            raise ValueError(f"the load factor must be a number or {self.n_load_groups} factors (one per load "
+                             f"group), got shape {factors.shape}")
+        if not np.all(np.isfinite(factors)):
+            raise FloatingPointError(f"non-finite load factor {factors.tolist()!r}")
+        return factors
 
     def _check_loads_on_constrained(self) -> None:
         """Refuse nodal loads that act on constrained DoFs only: the supports would carry all of them.
@@ -198,11 +232,12 @@ class Model:
         fixed direction) goes to the reactions: the residual keeps the free DoFs only. Only when no part of
         the nodal loads reaches a free DoF (and there is no pressure) is the load surely a mistake.
         """
-        loaded = np.any(self.dead != 0, axis=1) | np.any(self.follower != 0, axis=1)
+        loaded = np.any(self._group_dead != 0, axis=(0, 2)) | np.any(self._group_follower != 0, axis=(0, 2))
         if self.pressures or not loaded.any():
             return
-        f = self.external_force(self.initial_state())
-        scale = max(np.abs(self.dead).max(), np.abs(self.follower).max())
+        state = self.initial_state()         # each load group on its own (groups may cancel at factor 1)
+        f = np.array([self.external_force(state, factors) for factors in np.eye(self.n_load_groups)])
+        scale = max(np.abs(self._group_dead).max(), np.abs(self._group_follower).max())
         if np.abs(f).max() <= 1e-12 * scale:
             nodes = np.flatnonzero(loaded)
             raise ModelError(f"every load acts on constrained DoFs only (node{'s' if nodes.size > 1 else ''} "
@@ -228,20 +263,28 @@ class Model:
         update_frames_into(frames, np.zeros((1, 2)), frames.copy())
 
     # -- evaluation --------------------------------------------------------------------------------------
-    def _external_local(self, state: ShellState):
-        """Local external force (n, 6), its nodal tangent blocks (n, 6, 6) and pressure element blocks."""
+    def _external_local(self, state: ShellState, lam=1.0):
+        """The external load sum_k lambda_k f_ext,k: local force (n, 6), its nodal tangent blocks (n, 6, 6)
+        and pressure element blocks (``lam`` as in :meth:`group_factors`)."""
+        factors = self.group_factors(lam)
+        if self.n_load_groups == 1:          # one group: no sum over groups
+            dead, follower = factors[0] * self.dead, factors[0] * self.follower
+        else:
+            dead = np.tensordot(factors, self._group_dead, axes=1)
+            follower = np.tensordot(factors, self._group_follower, axes=1)
         R = state.frames
-        f = self.follower.copy()
-        f[:, :3] += np.einsum("nji,nj->ni", R, self.dead[:, :3])
-        f[:, 3:] += np.einsum("nji,nj->ni", R, self.dead[:, 3:])
+        f = follower.copy()
+        f[:, :3] += np.einsum("nji,nj->ni", R, dead[:, :3])
+        f[:, 3:] += np.einsum("nji,nj->ni", R, dead[:, 3:])
         blocks = np.zeros((len(R), 6, 6))   # d f_ext / d h (local), nodal
-        Fl = np.einsum("nji,nj->ni", R, self.dead[:, :3])
-        Ml = np.einsum("nji,nj->ni", R, self.dead[:, 3:])
+        Fl = np.einsum("nji,nj->ni", R, dead[:, :3])
+        Ml = np.einsum("nji,nj->ni", R, dead[:, 3:])
         blocks[:, :3, 3:] = hat_many(Fl)
         blocks[:, 3:, 3:] = hat_many(Ml)
         press = []
-        for p in self.pressures:
-            F, dF, elems = pressure_contribution(self.body.mesh, self.body.relative_positions(state), p.pressure,
+        for p, group in zip(self.pressures, self._pressure_groups):
+            F, dF, elems = pressure_contribution(self.body.mesh, self.body.relative_positions(state),
+                                                 factors[group] * p.pressure,
                                                  p.elements)
             Fl = np.einsum("nji,nj->ni", R, F)
             f[:, :3] += Fl
@@ -266,18 +309,17 @@ class Model:
         S[idx] = np.einsum("nji,njk->nik", self.basis[idx], state.frames[idx])
         return S
 
-    def residual(self, state: ShellState, lam: float) -> np.ndarray:
-        """r(q, lambda) on the free DoFs."""
+    def residual(self, state: ShellState, lam: float | np.ndarray) -> np.ndarray:
+        """r(q, lambda) on the free DoFs (``lam``: a number, or one factor per load group)."""
         r6 = self._residual6(state, lam, want_tangent=False)[0]
         return self._rotate_rows(state, r6).ravel()[self.free]
 
-    def _residual6(self, state: ShellState, lam: float, want_tangent: bool):
+    def _residual6(self, state: ShellState, lam: float | np.ndarray, want_tangent: bool):
         """Nodal residuals r6 (n, 6), element tangents, external load blocks, pressure blocks, and the
         nodal residuals whose translation part turns with the frames in the iteration matrix: r6 itself,
         or in the mixed iteration (``state.stress`` set) those of the iterated stresses."""
         self._check_finite(state)
-        if not np.isfinite(lam):
-            raise FloatingPointError(f"non-finite load factor {lam!r}")
+        self.group_factors(lam)                       # checked before the element loop
         fs = None
         if want_tangent and state.stress is not None:
             fe, Ke, fs = self.body.mixed_element_forces(state, state.stress)
@@ -293,16 +335,16 @@ class Model:
         n = self.body.n_nodes
         r6 = np.zeros(6 * n)
         np.add.at(r6, self._dof6, fe)
-        fext, ext_blocks, press = self._external_local(state)
+        fext, ext_blocks, press = self._external_local(state, lam)     # scaled by the load factors
         bad = np.flatnonzero(~np.all(np.isfinite(fext), axis=1))
         if bad.size:
             raise FloatingPointError(f"non-finite external load at node {bad[0]}: {fext[bad[0]].tolist()}")
-        r6 = r6.reshape(n, 6) - lam * fext
+        r6 = r6.reshape(n, 6) - fext
         turning = r6
         if fs is not None:
             turning = np.zeros(6 * n)
             np.add.at(turning, self._dof6, fs)
-            turning = turning.reshape(n, 6) - lam * fext
+            turning = turning.reshape(n, 6) - fext
         return r6, Ke, ext_blocks, press, turning
 
     def _rotate_rows(self, state: ShellState, r6: np.ndarray) -> np.ndarray:
@@ -310,8 +352,8 @@ class Model:
         out[:, :3] = np.einsum("nij,nj->ni", self._row_maps(state), r6[:, :3])
         return out
 
-    def residual_and_tangent(self, state: ShellState, lam: float):
-        """r (free,) and the tangent K = dr/dq (free x free, CSC) at the state."""
+    def residual_and_tangent(self, state: ShellState, lam: float | np.ndarray):
+        """r (free,) and the tangent K = dr/dq (free x free, CSC) at the state (``lam`` as in :meth:`residual`)."""
         r6, Ke, ext_blocks, press, turning = self._residual6(state, lam, want_tangent=True)
         self.counters.tangents += 1
         n = self.body.n_nodes
@@ -322,21 +364,22 @@ class Model:
         C[idx] = np.transpose(S[idx], (0, 2, 1))
         data = np.zeros(self._indices.size)
         scatter_blocks(Ke, S[conn], C[conn], self._slot_elem, 1.0, data)
-        nodal = -lam * ext_blocks
+        nodal = -ext_blocks
         nodal[:, :3, 3:] -= hat_many(turning[:, :3])                # the turning frame: -hat(r_u,I)
         scatter_blocks(nodal, S[:, None], C[:, None], self._slot_node, 1.0, data)
         for elems, conn_p, local in press:
             blocks = np.zeros((len(elems), 6, 6, 6, 6))
             blocks[:, :, :3, :, :3] = local.transpose(0, 1, 3, 2, 4)
             scatter_blocks(blocks.reshape(len(elems), 36, 36), S[conn_p], C[conn_p], self._slot_elem[elems],
-                           -lam, data)
+                           -1.0, data)
         K = sp.csr_matrix((data, self._indices, self._indptr), shape=(self.n_dof, self.n_dof))
         r = self._rotate_rows(state, r6).ravel()[self.free]
         return r, K.tocsc()
 
-    def external_force(self, state: ShellState) -> np.ndarray:
-        """f_ext(q) on the free DoFs (the residual is f_int - lambda f_ext)."""
-        fext = self._external_local(state)[0]
+    def external_force(self, state: ShellState, lam: float | np.ndarray = 1.0) -> np.ndarray:
+        """f_ext(q) on the free DoFs (the residual is f_int - lambda f_ext); with the load groups' factors
+        ``lam``: sum_k lambda_k f_ext,k."""
+        fext = self._external_local(state, lam)[0]
         bad = np.flatnonzero(~np.all(np.isfinite(fext), axis=1))
         if bad.size:
             raise FloatingPointError(f"non-finite external load at node {bad[0]}: {fext[bad[0]].tolist()}")

@@ -5,6 +5,8 @@ integrators (``integrators.generalized_alpha``) the equations of motion on the f
 
     r(q, vdot, t) = M vdot + f_int(q) - lambda(t) f_ext(q) - f_g = 0
 
+(with load groups, lambda(t) f_ext is sum_k lambda_k(t) f_ext,k, see ``Model.load_groups``).
+
 Velocity layout: the Lie group is R^3 x SO(3) per node.
 * translations: the velocity components in *fixed* directions, the same directions as the Model's
   translational equations: global x, y, z for free nodes, the constraint basis E_I for nodes with a fixed
@@ -39,7 +41,7 @@ import scipy.sparse as sp
 
 from flexbody.assembly import Model
 from flexbody.body import ShellState
-from flexbody.shell.inertia import NodalInertia, nodal_inertia
+from flexbody.shell.inertia import NodalInertia, nodal_inertia, with_point_masses
 
 
 @dataclass(frozen=True)
@@ -94,15 +96,21 @@ class DynamicModel:
     ----------
     model : the static model (body, constraints, loads); its loads are scaled by ``load_factor(t)``
     gravity : body acceleration g (3,), applied as the dead nodal forces m_I g
-    load_factor : lambda(t) for the Model's loads (default: 1 at all times)
+    load_factor : lambda(t) for the Model's loads (default: 1 at all times); for a Model with G load groups
+        (``Model.load_groups``) it may return the G factors lambda_k(t), one per group:
+        r = M vdot + f_int - sum_k lambda_k(t) f_ext,k - f_g
     prescribed : rigid motions in time of clamped nodes (:class:`PrescribedMotion`); their mass does not
         enter the equations, energies and momenta (it sits on fixed DoFs)
+    point_masses : tip masses (:class:`flexbody.shell.inertia.PointMass`) added to the shell's lumped nodal
+        inertia (``inertia``): they take part in everything the mass does (inertia forces, gravity, energies,
+        momenta, the steady spin's centrifugal load)
     """
 
     model: Model
     gravity: np.ndarray | tuple = (0.0, 0.0, 0.0)
-    load_factor: Callable[[float], float] | None = None
+    load_factor: Callable[[float], float | np.ndarray] | None = None
     prescribed: list = field(default_factory=list)
+    point_masses: list = field(default_factory=list)
     inertia: NodalInertia = field(init=False)
 
     def __post_init__(self) -> None:
@@ -110,7 +118,7 @@ class DynamicModel:
         if self.gravity.shape != (3,) or not np.all(np.isfinite(self.gravity)):
             raise ValueError(f"gravity must be a finite 3-vector, got {self.gravity!r}")
         m = self.model
-        self.inertia = nodal_inertia(m.body)
+        self.inertia = with_point_masses(nodal_inertia(m.body), self.point_masses)
         free = m.free
         self.node = free // 6                      # node of each free DoF
         self.comp = free % 6                       # 0..2 translation, 3..4 rotation
@@ -147,8 +155,12 @@ class DynamicModel:
         """The dead nodal forces m_I g on the free DoFs (the rows of the Model)."""
         return self._gravity_force
 
-    def lam(self, t: float) -> float:
-        return 1.0 if self.load_factor is None else float(self.load_factor(t))
+    def lam(self, t: float) -> float | np.ndarray:
+        """lambda(t): a number, or the factors (G,) of the Model's load groups."""
+        if self.load_factor is None:
+            return 1.0
+        value = np.asarray(self.load_factor(t), dtype=float)
+        return float(value) if value.ndim == 0 else self.model.group_factors(value)
 
     def _fixed_direction_vectors(self, vec: np.ndarray) -> np.ndarray:
         """Global nodal vectors (n, 3) -> their components on the free translation DoFs (zero on rotations)."""

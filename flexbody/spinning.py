@@ -37,7 +37,7 @@ the centrifugal stiffness itself (the translations normal to the axis, with a ne
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -182,12 +182,12 @@ class SpinningModel:
         return sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(colidx))),
                              shape=(m.n_dof, m.n_dof))
 
-    def _model_factor(self) -> float:
+    def _model_factor(self) -> float | np.ndarray:
         return self.dynamic.lam(self.load_factor_time)
 
     def external_force(self, state: ShellState) -> np.ndarray:
         """The whole load at lam = 1: the model's loads at lambda(t), gravity and the spin load."""
-        return (self._model_factor() * self.model.external_force(state) + self.dynamic.gravity_force
+        return (self.model.external_force(state, self._model_factor()) + self.dynamic.gravity_force
                 + self.spin_load(state))
 
     def residual(self, state: ShellState, lam: float) -> np.ndarray:
@@ -282,8 +282,8 @@ def steady_spin(dynamic: DynamicModel, omega, center=None, *, time: float = 0.0,
     solve_dynamic = dynamic
     if not model.constraints:
         gauge = gauge_supports(dynamic, omega, center)
-        gauged = Model(model.body, list(gauge), model.loads)
-        solve_dynamic = DynamicModel(gauged, dynamic.gravity, dynamic.load_factor, list(dynamic.prescribed))
+        gauged = Model(model.body, list(gauge), model.loads, load_groups=model.load_groups)
+        solve_dynamic = replace(dynamic, model=gauged)        # the same mass, point masses, loads, ...
     spin = SpinningModel(solve_dynamic, omega, center, time)
     result = load_control(spin, n_steps=n_steps, settings=settings or NewtonSettings())
     if not result.converged:

@@ -784,9 +784,10 @@ def _rigid_field(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """(v0, omega) of the scene's initial velocity field v = v0 + omega x X (raises if it is not rigid)."""
     a = scene.analysis
     X = scene.model.body.mesh.nodes
-    if a.initial_state is not None or a.prescribed or a.load_factor is not None or scene.model.loads:
-        raise ValueError(f"scene {scene.name!r}: only free, unloaded bodies with a rigid initial velocity "
-                         "field have an exudyn counterpart")
+    if a.initial_state is not None or a.prescribed or a.load_factor is not None or scene.model.loads \
+            or a.point_masses:
+        raise ValueError(f"scene {scene.name!r}: only free, unloaded bodies without point masses and with a rigid "
+                         "initial velocity field have an exudyn counterpart")
     v = np.zeros_like(X) if a.initial_velocity is None else np.asarray(a.initial_velocity, float)
     w_nodes = np.zeros_like(X) if a.initial_angular_velocity is None else np.asarray(a.initial_angular_velocity, float)
     w = w_nodes.mean(axis=0)

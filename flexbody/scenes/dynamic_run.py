@@ -69,6 +69,92 @@ def rigid_field(positions: np.ndarray, angular_velocity, center=None,
     return xdot, np.tile(w, (len(x), 1))
 
 
+RADIAL_SHAPES = ("uniform", "linear", "quadratic")
+
+
+def _shown(value) -> str:
+    """A value for an error message (arrays as lists)."""
+    return repr(value.tolist() if isinstance(value, np.ndarray) else value)
+
+
+def polar_coordinates(positions: np.ndarray, center=(0.0, 0.0, 0.0),
+                      axis=(0.0, 0.0, 1.0)) -> tuple[np.ndarray, np.ndarray]:
+    """Distance r from the axis through ``center`` and angle theta about it, of points (n, 3).
+
+    theta is measured from the projection of global x on the plane normal to the axis (of global y when the
+    axis is along x), positive about the axis: for the axis z, the usual polar angle.
+    """
+    n = np.asarray(axis, dtype=float)
+    if n.shape != (3,) or not np.all(np.isfinite(n)) or not np.abs(n).max() > 0:
+        raise ValueError(f"axis must be a finite nonzero 3-vector, got {_shown(axis)}")
+    n = n / np.abs(n).max()
+    n = n / np.linalg.norm(n)
+    ref = np.eye(3)[0] if abs(n[0]) < 0.9 else np.eye(3)[1]
+    e1 = ref - (ref @ n) * n
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(n, e1)
+    rel = np.asarray(positions, dtype=float) - np.asarray(center, dtype=float)
+    a, b = rel @ e1, rel @ e2
+    return np.hypot(a, b), np.arctan2(b, a)
+
+
+def radial_shape(r: np.ndarray, shape, inner: float, outer: float) -> np.ndarray:
+    """f(r) of a velocity field: with s = (r - a) / (b - a) held in [0, 1], "uniform" 1, "linear" s,
+    "quadratic" s^2, or a table (r_k, f_k) interpolated linearly in r and held at its ends."""
+    if isinstance(shape, str):
+        if shape not in RADIAL_SHAPES:
+            raise ValueError(f"radial must be one of {', '.join(map(repr, RADIAL_SHAPES))} or a table "
+                             f"[[r...], [f...]], got {shape!r}")
+        if not (np.isfinite(inner) and np.isfinite(outer) and outer > inner):
+            raise ValueError(f"outer_radius must exceed inner_radius, got {inner!r} and {outer!r}")
+        s = np.clip((r - inner) / (outer - inner), 0.0, 1.0)
+        return np.ones_like(r) if shape == "uniform" else s if shape == "linear" else s * s
+    try:
+        rk, fk = (np.asarray(v, dtype=float) for v in shape)
+    except (TypeError, ValueError):
+        raise ValueError(f"radial table must be two lists [r...], [f...], got {shape!r}") from None
+    if rk.ndim != 1 or rk.size < 1 or rk.shape != fk.shape or not np.all(np.isfinite(rk)) \
+            or not np.all(np.isfinite(fk)) or np.any(np.diff(rk) <= 0):
+        raise ValueError(f"radial table must be two lists of equal length, finite, the radii increasing, "
+                         f"got {shape!r}")
+    return np.interp(r, rk, fk)
+
+
+def modal_velocity_field(positions: np.ndarray, direction, amplitude: float, radial="linear",
+                         modes=(0,), phase: float = 0.0, inner_radius: float | None = None,
+                         outer_radius: float | None = None, center=(0.0, 0.0, 0.0),
+                         axis=(0.0, 0.0, 1.0)) -> np.ndarray:
+    """Nodal velocities (n, 3) v_I = amplitude f(r_I) sum_n cos(n (theta_I - phase)) d along ``direction`` d.
+
+    A kick out of plane (d the axis) or in any direction, with circumferential modes n (cos n theta,
+    n = 0 the axisymmetric one) and a radial shape f (:func:`radial_shape`) between ``inner_radius`` a and
+    ``outer_radius`` b (default: the smallest and largest distance of the nodes from the axis). For the kick
+    v_z = 0.05 (r - a)/(b - a) sum_{n=0..3} cos n theta of an annulus:
+    ``modal_velocity_field(x, [0, 0, 1], 0.05, "linear", modes=[0, 1, 2, 3])``. Add it to the
+    ``initial_velocity`` of a :class:`flexbody.scenes.scene.DynamicAnalysis` (for a steady-spin start it is
+    the kick on top of the spin). r and theta are those of :func:`polar_coordinates`; ``direction`` is
+    normalised; ``phase`` is in radians.
+    """
+    x = np.asarray(positions, dtype=float)
+    d = np.asarray(direction, dtype=float)
+    if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.abs(d).max() > 0:
+        raise ValueError(f"direction must be a finite nonzero 3-vector, got {_shown(direction)}")
+    d = d / np.abs(d).max()
+    d = d / np.linalg.norm(d)
+    if isinstance(amplitude, bool) or not np.isfinite(amplitude):
+        raise ValueError(f"amplitude must be a finite number, got {amplitude!r}")
+    if isinstance(phase, bool) or not np.isfinite(phase):
+        raise ValueError(f"phase must be a finite number, got {phase!r}")
+    modes = list(modes)
+    if not modes or not all(isinstance(m, (int, np.integer)) and not isinstance(m, bool) and m >= 0 for m in modes):
+        raise ValueError(f"modes must be a non-empty list of integers >= 0, got {modes!r}")
+    r, theta = polar_coordinates(x, center, axis)
+    a = float(r.min()) if inner_radius is None else float(inner_radius)
+    b = float(r.max()) if outer_radius is None else float(outer_radius)
+    pattern = sum(np.cos(m * (theta - phase)) for m in modes)
+    return (amplitude * radial_shape(r, radial, a, b) * pattern)[:, None] * d
+
+
 def spin_up_angle(rate: float, ramp: float) -> Callable[[float], float]:
     """The angle of a smooth spin-up: omega(t) = rate (1 - cos(pi t / ramp)) / 2 for t < ramp, then rate.
 
@@ -348,7 +434,8 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
     from integrators.generalized_alpha import generalized_alpha
 
     model, a = scene.model, scene.analysis
-    dyn = DynamicModel(model, gravity=a.gravity, load_factor=a.load_factor, prescribed=list(a.prescribed))
+    dyn = DynamicModel(model, gravity=a.gravity, load_factor=a.load_factor, prescribed=list(a.prescribed),
+                       point_masses=list(a.point_masses))
     state, v0 = initial_conditions(dyn, a)
     history: dict[str, list[float]] = {"time": [], **{o.name: [] for o in scene.outputs}}
     energies: dict[str, list] = {k: [] for k in ("time", *ENERGY_KEYS, "linear_momentum", "angular_momentum")}

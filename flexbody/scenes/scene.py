@@ -163,7 +163,9 @@ class DynamicAnalysis:
         is poor) or "full" (refreshed every iteration)
     output_every : record the outputs, energies and momenta (and write the files) every k-th step
     gravity : body acceleration g (3,)
-    load_factor : lambda(t) that scales the Model's loads (None: 1 at all times)
+    load_factor : lambda(t) that scales the Model's loads (None: 1 at all times), or for a Model with load
+        groups (``Model.load_groups``) the factors (G,) of its groups, e.g.
+        :class:`flexbody.time_functions.GroupFactors`
     prescribed : rigid motions in time of clamped nodes (:class:`flexbody.dynamics.PrescribedMotion`)
     initial_state : the configuration at t = 0 (None: the reference configuration), or
         :class:`flexbody.spinning.SteadySpinStart`: the steady spin (relative equilibrium) at a constant
@@ -178,6 +180,8 @@ class DynamicAnalysis:
         than ``SINGLE_THREAD_ELEMENTS`` elements (thread start-up dominates there: measured on a shared
         2-core machine, 100 steps of the 64-element membrane take 0.34 s on one thread and 2.1 s on two,
         20 steps of 1152 elements 0.72 s and 1.37 s), numba's default otherwise
+    point_masses : tip masses and rotary inertias at nodes (:class:`flexbody.shell.inertia.PointMass`),
+        added to the shell's lumped inertia
 
     Compared by identity (it holds arrays and functions).
     """
@@ -199,6 +203,7 @@ class DynamicAnalysis:
     initial_angular_velocity: np.ndarray | None = None
     settings: object | None = None
     threads: int | None = None
+    point_masses: tuple = ()
 
     def __post_init__(self) -> None:
         for name in ("time_step", "end_time"):

@@ -8,13 +8,17 @@ In short (every table but ``[mesh]``, ``[material]`` and one ``[[output]]`` is o
     [material]             young, poisson, thickness, density, shear_correction
     [element]              tying = true, kernel = "numba"
     [[bc]]                 type = "fix" | "symmetry" on a node selection
-    [[load]]               type = "nodal" | "edge_force" | "edge_moment" | "surface_force" | "pressure"
+    [[load]]               type = "nodal" | "edge_force" | "edge_moment" | "surface_force" | "pressure";
+                           time_function = {type = "ramp" | "pulse" | "table", ...} (dynamic)
+    [[point_mass]]         mass, rotary, a node selection: tip masses (dynamic)
     [analysis]             method = "load_control" | "arc_length", steps, max_load_factor, ...
     [analysis.newton]      any field of integrators.newton.NewtonSettings
       or [analysis]        type = "dynamic", dt, end_time, rho_inf, policy, output_every, gravity, load_ramp_time
     [analysis.initial]     velocity, angular_velocity, center: a rigid initial velocity field (dynamic);
                            state = "steady_spin": start on the steady spin at angular_velocity instead
-    [analysis.hub]         a node selection, angular_velocity, ramp_time, center: a hub spun up (dynamic)
+    [[analysis.initial.velocity_field]]  direction, amplitude, radial, modes, ...: added (a kick)
+    [analysis.hub]         a node selection (or radius, or polygon), angular_velocity, ramp_time, center:
+                           a hub spun up (dynamic)
     [analysis.integrator]  rtol, atol, max_iterations, refresh_ratio, max_cutbacks, ... (dynamic)
     [[output]]             name, a node selection of one node, component or direction, scale; or
                            type = "radial" (mean radial displacement of nodes) | "angular_velocity"
@@ -62,8 +66,12 @@ DENSITY_PARAMETERS = {
 }
 #: generator parameters in radians that may be given in degrees with the suffix ``_deg``
 _RADIAN_PARAMETERS = ("angle",)
-_SECTIONS = ("name", "description", "mesh", "material", "element", "bc", "load", "analysis", "output", "reference")
+_SECTIONS = ("name", "description", "mesh", "material", "element", "bc", "load", "point_mass", "analysis", "output",
+             "reference")
 _SELECTORS = ("set", "nodes", "near", "plane", "ring")
+_HUB_SHAPES = ("radius", "polygon")             # a hub's nodes may also be given by these
+_VELOCITY_FIELD_KEYS = ("direction", "amplitude", "radial", "modes", "phase", "inner_radius", "outer_radius",
+                        "center", "axis")
 _MATERIAL_KEYS = ("young", "poisson", "thickness", "density", "shear_correction")
 _ANALYSIS_KEYS = ("method", "steps", "max_load_factor", "load_factors", "arc_increment", "max_load_increment",
                   "max_steps", "min_increment_ratio", "max_increment_ratio", "desired_iterations", "newton")
@@ -508,24 +516,160 @@ def _build_integrator(t: _Table | None):
     return _wrap(t.where, "analysis.integrator", AlphaSettings, **kwargs)
 
 
-def _centre_of_mass(body) -> np.ndarray:
-    from flexbody.shell.inertia import nodal_inertia
-    m = nodal_inertia(body).mass
+def _centre_of_mass(body, point_masses=()) -> np.ndarray:
+    from flexbody.shell.inertia import nodal_inertia, with_point_masses
+    m = with_point_masses(nodal_inertia(body), point_masses).mass
     return (m @ body.mesh.nodes) / m.sum()
 
 
 def _hub_nodes(doc_analysis: Any, mesh, where: str) -> np.ndarray | None:
-    """The nodes of ``[analysis.hub]`` (clamped to the hub), or None."""
+    """The nodes of ``[analysis.hub]`` (clamped to the hub), or None: a node selection, or the nodes within
+    ``radius`` of the hub's axis, or inside the regular ``polygon`` about it (:func:`_hub_shape_nodes`)."""
     if not isinstance(doc_analysis, dict) or "hub" not in doc_analysis:
         return None
     hub = _Table(doc_analysis["hub"], "analysis.hub", where)
+    given = [k for k in (*_SELECTORS, *_HUB_SHAPES) if hub.has(k)]
+    if len(given) == 1 and given[0] in _HUB_SHAPES:
+        return _hub_shape_nodes(hub, mesh, given[0])
+    if len(given) != 1:
+        raise SceneError(f"{where}: [analysis.hub] needs exactly one node selection of "
+                         f"{', '.join((*_SELECTORS, *_HUB_SHAPES))}, got {given or 'none'}")
     return _select_nodes(hub, mesh)
 
 
-def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None) -> DynamicAnalysis:
-    """``[analysis] type = "dynamic"`` with its ``initial``, ``hub`` and ``integrator`` tables."""
+def _hub_shape_nodes(hub: _Table, mesh, kind: str) -> np.ndarray:
+    """The nodes within ``radius`` of the hub's axis, or inside ``polygon = {sides, circumradius, angle}``
+    (vertex 0 at ``angle`` radians from the reference direction of the polar angle), both about the axis
+    along ``angular_velocity`` (z if it is zero) through ``center``; boundary nodes included."""
+    from flexbody.scenes.dynamic_run import polar_coordinates
+    omega = hub.vector("angular_velocity")
+    axis = omega if np.abs(omega).max() > 0 else np.array([0.0, 0.0, 1.0])
+    center = hub.vector("center", [0.0, 0.0, 0.0])
+    r, theta = polar_coordinates(mesh.nodes, center, axis)
+    tol = 1e-8 * (float(np.ptp(mesh.nodes, axis=0).max()) or 1.0)
+    if kind == "radius":
+        radius = hub.number("radius", positive=True)
+        nodes = np.flatnonzero(r <= radius + tol)
+        what = f"within radius {radius}"
+    else:
+        poly = hub.table("polygon")
+        sides = poly.integer("sides", minimum=3)
+        circumradius = poly.number("circumradius", positive=True)
+        angle = poly.number("angle", 0.0)
+        poly.done(["sides", "circumradius", "angle"])
+        normals = angle + np.pi / sides + 2 * np.pi * np.arange(sides) / sides     # the sides' normals
+        apothem = circumradius * np.cos(np.pi / sides)
+        inside = np.all(r[:, None] * np.cos(theta[:, None] - normals[None, :]) <= apothem + tol, axis=1)
+        nodes = np.flatnonzero(inside)
+        what = f"inside the {sides}-sided polygon of circumradius {circumradius}"
+    if nodes.size == 0:
+        raise SceneError(f"{hub.where}: {hub.key(kind)} selects no nodes (no node lies {what} about the axis "
+                         f"through {center.tolist()} along {axis.tolist()})")
+    return nodes
+
+
+def _velocity_fields(it: _Table, positions: np.ndarray) -> np.ndarray:
+    """The sum (n, 3) of the ``[[analysis.initial.velocity_field]]`` fields (zero without any)."""
+    from flexbody.scenes.dynamic_run import modal_velocity_field
+    total = np.zeros_like(positions)
+    for ft in it.tables("velocity_field"):
+        radial = ft.raw("radial", "linear")
+        if not isinstance(radial, str):
+            ok = (isinstance(radial, list) and len(radial) == 2 and all(isinstance(v, list) for v in radial))
+            if not ok:
+                raise ft.error("radial", f"must be one of 'uniform', 'linear', 'quadratic' or a table "
+                                         f"[[r...], [f...]], got {radial!r}")
+        modes = ft.raw("modes", [0])
+        if not (isinstance(modes, list) and modes
+                and all(isinstance(m, int) and not isinstance(m, bool) and m >= 0 for m in modes)):
+            raise ft.error("modes", f"must be a non-empty list of integers >= 0 (cos n theta), got {modes!r}")
+        kwargs = dict(direction=ft.vector("direction"), amplitude=ft.number("amplitude"), radial=radial,
+                      modes=modes, phase=ft.number("phase", 0.0),
+                      inner_radius=ft.number("inner_radius", None), outer_radius=ft.number("outer_radius", None),
+                      center=ft.vector("center", [0.0, 0.0, 0.0]), axis=ft.vector("axis", [0.0, 0.0, 1.0]))
+        ft.done(_VELOCITY_FIELD_KEYS)
+        total += _wrap(ft.where, ft.path, modal_velocity_field, positions, **kwargs)
+    return total
+
+
+def _build_time_function(t: _Table) -> Callable[[float], float]:
+    """The ``time_function`` of a ``[[load]]``: {type = "ramp", time}, {type = "pulse", start, duration,
+    shape} or {type = "table", time = [...], value = [...]} (:mod:`flexbody.time_functions`)."""
+    from flexbody.time_functions import Pulse, Ramp, Table
+    tf = t.table("time_function")
+    kind = tf.string("type", choices=("ramp", "pulse", "table"))
+    if kind == "ramp":
+        tf.done(["type", "time"])
+        return Ramp(tf.number("time", positive=True))
+    if kind == "pulse":
+        start, duration = tf.number("start", 0.0), tf.number("duration", positive=True)
+        if start < 0:
+            raise tf.error("start", f"must be >= 0, got {start!r}")
+        shape = tf.string("shape", "sin2", choices=Pulse.SHAPES)
+        tf.done(["type", "start", "duration", "shape"])
+        return Pulse(start, duration, shape)
+    times, values = tf.numbers("time"), tf.numbers("value")
+    tf.done(["type", "time", "value"])
+    if len(values) != len(times):
+        raise tf.error("value", f"must have one value per time ({len(times)}), got {len(values)}")
+    if any(b <= a for a, b in zip(times, times[1:])):
+        raise tf.error("time", f"must be increasing, got {times}")
+    return Table(np.array(times), np.array(values))
+
+
+def _build_timed_loads(tables: list[_Table], mesh, dynamic: bool) -> tuple[list, tuple[int, ...] | None, list]:
+    """The loads of the ``[[load]]`` tables, the load group of each and the time function of each group.
+
+    Group 0 holds the loads without a ``time_function`` (they follow ``load_ramp_time``); every table with
+    one is a group of its own. Without any time function: (loads, None, []).
+    """
+    loads, groups, functions = [], [], []
+    for t in tables:
+        function = None
+        if t.has("time_function"):
+            if not dynamic:
+                raise t.error("time_function", "needs a dynamic analysis ([analysis] type = \"dynamic\"); a "
+                                               "static scene's loads follow the load factor")
+            function = _build_time_function(t)
+            functions.append(function)
+        built = _build_loads([t], mesh)
+        loads += built
+        groups += [len(functions) if function is not None else 0] * len(built)
+    return loads, (tuple(groups) if functions else None), functions
+
+
+def _build_point_masses(tables: list[_Table], mesh, dynamic: bool) -> tuple:
+    """The :class:`flexbody.shell.inertia.PointMass` of the ``[[point_mass]]`` tables."""
+    from flexbody.shell.inertia import PointMass
+    out = []
+    for t in tables:
+        if not dynamic:
+            raise SceneError(f"{t.where}: [[point_mass]] needs a dynamic analysis ([analysis] type = \"dynamic\")")
+        nodes = _select_nodes(t, mesh)
+        mass = t.number("mass")
+        if mass < 0:
+            raise t.error("mass", f"must be >= 0, got {mass!r}")
+        if isinstance(t.data.get("rotary"), list):
+            raise t.error("rotary", "must be one number: the moment of inertia about every axis normal to the "
+                                    "director (a 5-DoF node's in-plane axes are not material axes, so two "
+                                    f"different moments cannot be represented), got {t.data['rotary']!r}")
+        rotary = t.number("rotary", 0.0)
+        if rotary < 0:
+            raise t.error("rotary", f"must be >= 0, got {rotary!r}")
+        t.done(["mass", "rotary", *_SELECTORS])
+        out.append(PointMass(nodes, mass, rotary))
+    return tuple(out)
+
+
+def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None, load_functions: list = (),
+                            point_masses: tuple = ()) -> DynamicAnalysis:
+    """``[analysis] type = "dynamic"`` with its ``initial``, ``hub`` and ``integrator`` tables.
+
+    ``load_functions``: the time functions of load groups 1, 2, ... (group 0 follows ``load_ramp_time``).
+    """
     from flexbody.dynamics import PrescribedMotion
     from flexbody.scenes.dynamic_run import hub_spin_up, rigid_field
+    from flexbody.time_functions import GroupFactors, Ramp, constant
     t.string("type", choices=("static", "dynamic"))
     dt, end = t.number("dt", positive=True), t.number("end_time", positive=True)
     rho_inf = t.number("rho_inf", 0.9)
@@ -535,16 +679,19 @@ def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None) -> Dy
     ramp = t.number("load_ramp_time", 0.0)
     if ramp < 0:
         raise t.error("load_ramp_time", f"must be >= 0, got {ramp!r}")
-    load_factor = (lambda time_, T=ramp: min(time_ / T, 1.0)) if ramp > 0 else None
+    load_factor = Ramp(ramp) if ramp > 0 else None
+    if load_functions:
+        load_factor = GroupFactors((load_factor or constant, *load_functions))
     settings = _build_integrator(t.table("integrator") if t.has("integrator") else None)
-    kwargs: dict[str, Any] = {}
+    kwargs: dict[str, Any] = {"point_masses": tuple(point_masses)}
     if t.has("initial"):
         it = t.table("initial")
         start = it.string("state", "reference", choices=("reference", "steady_spin"))
         omega = it.vector("angular_velocity", [0.0, 0.0, 0.0])
         velocity = it.vector("velocity", [0.0, 0.0, 0.0])
-        center = it.vector("center") if it.has("center") else _centre_of_mass(body)
-        it.done(["state", "velocity", "angular_velocity", "center"])
+        center = it.vector("center") if it.has("center") else _centre_of_mass(body, point_masses)
+        kick = _velocity_fields(it, body.mesh.nodes)
+        it.done(["state", "velocity", "angular_velocity", "center", "velocity_field"])
         if start == "steady_spin":
             if np.any(velocity):
                 raise it.error("velocity", "must be zero with state = \"steady_spin\" (a relative equilibrium "
@@ -553,19 +700,21 @@ def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None) -> Dy
                 raise it.error("angular_velocity", "must be nonzero with state = \"steady_spin\"")
             from flexbody.spinning import SteadySpinStart
             kwargs["initial_state"] = SteadySpinStart(tuple(omega), tuple(center))
+            if np.any(kick):
+                kwargs["initial_velocity"] = kick         # the kick on top of the spin
         else:
             xdot, w = rigid_field(body.mesh.nodes, omega, center, velocity)
-            kwargs.update(initial_velocity=xdot, initial_angular_velocity=w)
+            kwargs.update(initial_velocity=xdot + kick, initial_angular_velocity=w)
     if t.has("hub"):
         ht = t.table("hub")
-        for key in _SELECTORS:       # already read by _hub_nodes
+        for key in (*_SELECTORS, *_HUB_SHAPES):       # already read by _hub_nodes
             ht.used.add(key)
         omega = ht.vector("angular_velocity")
         hub_ramp = ht.number("ramp_time", 0.0)
         if hub_ramp < 0:
             raise ht.error("ramp_time", f"must be >= 0, got {hub_ramp!r}")
         center = ht.vector("center", [0.0, 0.0, 0.0])
-        ht.done([*_SELECTORS, "angular_velocity", "ramp_time", "center"])
+        ht.done([*_SELECTORS, *_HUB_SHAPES, "angular_velocity", "ramp_time", "center"])
         kwargs["prescribed"] = (PrescribedMotion(hub_nodes, hub_spin_up(omega, hub_ramp, center)),)
         spin = kwargs.get("initial_state")
         if spin is not None and (hub_ramp > 0 or not np.allclose(omega, spin.angular_velocity, rtol=1e-12, atol=0)):
@@ -705,8 +854,9 @@ def scene_from_document(doc: dict, path: str | Path) -> Scene:
     et.done(_ELEMENT_KEYS)
     body = _wrap(where, "element", ShellBody, mesh, material, tying=tying, kernel=kernel)
     constraints = _build_bcs(top.tables("bc"), mesh)
-    loads = _build_loads(top.tables("load"), mesh)
     dynamic = _analysis_type(doc, where) == "dynamic"
+    loads, load_groups, load_functions = _build_timed_loads(top.tables("load"), mesh, dynamic)
+    point_masses = _build_point_masses(top.tables("point_mass"), mesh, dynamic)
     if dynamic and not material.density > 0:
         raise SceneError(f"{where}: material.density must be > 0 for a dynamic analysis, got {material.density!r}")
     if not loads and not dynamic:
@@ -715,9 +865,10 @@ def scene_from_document(doc: dict, path: str | Path) -> Scene:
     if hub is not None:
         from flexbody.constraints import Fix
         constraints.append(Fix(hub, "all"))          # the hub nodes are clamped to the hub
-    model = _wrap(where, "bc/load", Model, body, constraints, loads)
+    model = _wrap(where, "bc/load", Model, body, constraints, loads, load_groups=load_groups)
     at = top.table("analysis", {})
-    analysis = _build_dynamic_analysis(at, body, hub) if dynamic else _build_analysis(at)
+    analysis = (_build_dynamic_analysis(at, body, hub, load_functions, point_masses) if dynamic
+                else _build_analysis(at))
     outputs = _build_outputs(top.tables("output"), mesh, dynamic)
     if not outputs:
         raise SceneError(f"{where}: a scene needs at least one [[output]]")

@@ -90,6 +90,52 @@ def nodal_inertia(body) -> NodalInertia:
     return NodalInertia(mat.density * mat.thickness * areas, mat.density * mat.thickness**3 / 12.0 * areas)
 
 
+@dataclass(frozen=True)
+class PointMass:
+    """A rigid mass attached at nodes (a tip mass): each of ``nodes`` carries ``mass`` and ``rotary``.
+
+    Parameters
+    ----------
+    nodes : the node indices; every one of them gets the whole mass and rotary inertia
+    mass : M >= 0, added to the translational mass m_I
+    rotary : J >= 0, added to the director inertia j_I: the moment of inertia about every axis normal to the
+        director t_I through the node. A 5-DoF node has no rotation about its director (its frame is
+        parallel-transported, w_3 = 0), so that moment of inertia does not enter, and the two in-plane axes are
+        not material axes: only an inertia that is the same about both (J diag(1, 1, 0)) is objective.
+    """
+
+    nodes: np.ndarray
+    mass: float
+    rotary: float = 0.0
+
+    def __post_init__(self) -> None:
+        nodes = np.atleast_1d(np.asarray(self.nodes))
+        if nodes.size == 0 or nodes.ndim != 1 or not np.issubdtype(nodes.dtype, np.integer):
+            raise ValueError(f"point mass nodes must be a non-empty list of node indices, got {self.nodes!r}")
+        object.__setattr__(self, "nodes", nodes.astype(int))
+        for name in ("mass", "rotary"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) \
+                    or not (np.isfinite(value) and value >= 0):
+                raise ValueError(f"point mass {name} must be a finite number >= 0, got {value!r}")
+            object.__setattr__(self, name, float(value))
+
+
+def with_point_masses(inertia: NodalInertia, point_masses) -> NodalInertia:
+    """The nodal inertia with point masses added: m_I += M, j_I += J on their nodes."""
+    mass, rotary = inertia.mass.copy(), inertia.rotary.copy()
+    n = mass.size
+    for p in point_masses:
+        if not isinstance(p, PointMass):
+            raise ValueError(f"point masses must be PointMass, got {type(p).__name__}")
+        bad = p.nodes[(p.nodes < 0) | (p.nodes >= n)]
+        if bad.size:
+            raise ValueError(f"point mass on node {bad[0]}, but the mesh has nodes 0..{n - 1}")
+        np.add.at(mass, p.nodes, p.mass)
+        np.add.at(rotary, p.nodes, p.rotary)
+    return NodalInertia(mass, rotary)
+
+
 def director_tensor(j: float) -> np.ndarray:
     """The local rotary inertia J = j diag(1, 1, 0) of a shell node (no drilling inertia)."""
     return np.diag([j, j, 0.0])
