@@ -179,6 +179,17 @@ class ShellBody:
         """Stress resultants C (eps_g + B_g dh) (m, 7, 8) at the Gauss points: of the state (dh_el None), or
         linearized along local nodal motions dh_el (m, 36), per node [du, dtheta] -- the stress update of
         the mixed Newton iteration (MITC6 variants)."""
+        eps, deps = self._linearized_strains(state, dh_el)
+        return (eps + deps) @ self.material.section().T
+
+    def stress_rates(self, state: ShellState, hdot_el: np.ndarray) -> np.ndarray:
+        """The linearized stress increments C B_g hdot (m, 7, 8) of local nodal motions hdot_el (m, 36) alone
+        (without the stresses of the state): with nodal velocities, the Kelvin-Voigt stresses of the strain
+        rates B v (zero for a rigid velocity). MITC6 variants."""
+        return self._linearized_strains(state, hdot_el)[1] @ self.material.section().T
+
+    def _linearized_strains(self, state: ShellState, dh_el: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """Strains eps_g (m, 7, 8) of the state and their linearized increments B_g dh (m, 7, 8)."""
         if not self.supports_mixed_iteration:
             raise ValueError("linearized stresses are not available for tying='mitc7'")
         x_el, fr_el, C, ref = self._element_arrays(state)
@@ -195,7 +206,7 @@ class ShellBody:
                      for e in range(m)]
             eps = np.array([p[0] for p in pairs]).reshape(m, N_GAUSS, 8)
             deps = np.array([p[1] for p in pairs]).reshape(m, N_GAUSS, 8)
-        return (eps + deps) @ C.T
+        return eps, deps
 
     def _bubble_element_forces(self, x_el, fr_el, C, want_tangent):
         """MITC7 elements: the rotation bubble condensed element by element, warm-started."""
