@@ -19,15 +19,18 @@ Dx gives D vdot = beta' Dx, D v = gamma' Dx with (BCA, linearisation of the step
 
 and the iteration matrix is S = M beta' + C_t gamma' + K_t T(h dq) (BCA, iteration matrix). Here M is constant,
 the only velocity-dependent force is the optional damping (no gyroscopic forces in the R^3 x SO(3)
-coordinates of the shell, see :mod:`flexbody.shell.inertia`): C_t = ``dyn.damping_matrix(K_t)`` (Rayleigh:
-a0 M + a1 K_t, the current tangent standing in for the material stiffness), and T(h dq) is approximated by
-the identity, both in the iteration matrix only; the residual r(q, v, vdot, t) is exact (q_{n+1} is always
+coordinates of the shell, see :mod:`flexbody.shell.inertia`): C_t = ``dyn.damping_matrix(q)`` (Rayleigh:
+a0 M + a1 K_m, the velocity derivative of the damping force; its derivative in q is left out), and T(h dq)
+is approximated by the identity, both in the iteration matrix only; the residual r(q, v, vdot, t) is exact (q_{n+1} is always
 recomputed as q_n o exp(x), v_{n+1} from the integration formulas). The approximations change the
 convergence rate of the iterations, not their fixed point.
 
-Dissipated work: with damping, D(t) = int_0^t v . f_d dt (the trapezoidal rule over the steps, from
-``dyn.dissipation_power(q, v)``) is carried in the records, so that T + W + V_g + D is the conserved balance
-of an otherwise conservative body.
+Dissipated work: with damping, D(t) = int_0^t v . f_d dt is carried in the records, so that T + W + V_g + D
+is the conserved balance of an otherwise conservative body. Per step, D += h v_m . f_m with the means
+v_m = (v_n + v_{n+1}) / 2, f_m = (f_d,n + f_d,n+1) / 2 (``dyn.damping_force(q, v)``): the work of the mean
+damping force on the step's displacement h v_m, which for rho_inf = 1 (h dq_n = h v_m) is the scheme's own
+energy loss on a linear system (the trapezoidal rule's energy identity). The trapezoid of the power
+v . f_d instead grows without bound on stiffly overdamped modes, whose velocities alternate in sign.
 
 Convergence and tangent reuse: a weighted RMS norm of the correction,
 ||Dx||_w = sqrt(mean((Dx_i / (atol s_i + rtol |x_i|))^2)) with s_i the DoF scale (model size for
@@ -196,7 +199,7 @@ class GeneralizedAlpha:
     """The integrator with its iteration matrix, factorization and counters (reused across steps).
 
     ``dyn`` supplies ``mass`` (n,), ``residual(q, v, vdot, t)``, ``residual_and_tangent(q, v, vdot, t)``,
-    ``update(q, dq)``, ``dof_scale``, optionally ``damping_matrix(K)`` and ``dissipation_power(q, v)``, and,
+    ``update(q, dq)``, ``dof_scale``, optionally ``damping_matrix(q)`` and ``damping_force(q, v)``, and,
     for the outputs, ``kinetic_energy``, ``strain_energy``, ``gravity_potential``, ``momenta`` (see
     :class:`flexbody.dynamics.DynamicModel`).
     """
@@ -217,7 +220,7 @@ class GeneralizedAlpha:
         self.stats.tangent_updates += 1
         self.stats.residual_evaluations += 1
         S = K + sp.diags(self.dyn.mass * self.params.beta_prime(self.h))
-        C = self.dyn.damping_matrix(K) if hasattr(self.dyn, "damping_matrix") else None
+        C = self.dyn.damping_matrix(step.state) if hasattr(self.dyn, "damping_matrix") else None
         if C is not None:
             S = S + self.params.gamma_prime(self.h) * C
         self.solver.factorize(S.tocsc())
@@ -318,9 +321,9 @@ def _record(dyn, index: int, t: float, state, v: np.ndarray, iterations: int, re
                              p, L, time.perf_counter() - t0, dissipated)
 
 
-def _dissipation_power(dyn, state, v: np.ndarray) -> float:
-    """v . f_d (0 for a model without ``dissipation_power``)."""
-    return dyn.dissipation_power(state, v) if hasattr(dyn, "dissipation_power") else 0.0
+def _damping_force(dyn, state, v: np.ndarray) -> np.ndarray:
+    """f_d(q, v) (0 for a model without ``damping_force``)."""
+    return dyn.damping_force(state, v) if hasattr(dyn, "damping_force") else np.zeros_like(v)
 
 
 class _StepFailure(RuntimeError):
@@ -392,20 +395,22 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
     a = vdot.copy()
     t0 = time.perf_counter()
     initial = _record(dyn, 0, t_start, q, v, 0, [], [], 0, 1, t0)
-    power, dissipated = _dissipation_power(dyn, q, v), 0.0   # v . f_d and its integral D (trapezoid)
+    f_damp, dissipated = _damping_force(dyn, q, v), 0.0      # f_d and D = int v . f_d dt (module docstring)
     records: list[DynamicStepRecord] = []
     t, done, last = t_start, 0, 0  # (q, v) after `done` steps at t; `last`: the last step given to on_step
     try:
         for n in range(n_steps):
             try:
+                v_old = v
                 q, v, vdot, a, its, res, cor, ref, sub = stepper.advance(q, v, vdot, a, t)
             except _StepFailure as exc:
                 return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, False,
                                      f"step {n + 1} from t = {t:.6g} failed: {exc}", time.perf_counter() - t0,
                                      dissipated)
             t, done = t_start + (n + 1) * h, n + 1  # no call since advance(): an interrupt cannot fall between
-            power_new = _dissipation_power(dyn, q, v)
-            dissipated, power = dissipated + 0.5 * h * (power + power_new), power_new
+            f_new = _damping_force(dyn, q, v)
+            dissipated += 0.25 * h * float((v_old + v) @ (f_damp + f_new))
+            f_damp = f_new
             if (n + 1) % record_every == 0 or n + 1 == n_steps:
                 rec = _record(dyn, n + 1, t, q, v, its, res, cor, ref, sub, t0, dissipated)
                 records.append(rec)

@@ -53,10 +53,9 @@ def test_damping_force_derivative_and_rigid_velocities():
                           for e in np.eye(dyn.n_dof)])
     expected = a0 * np.diag(dyn.mass) + a1 * material_tangent(dyn, state)
     assert np.abs(fd - expected).max() < 1e-8 * np.abs(expected).max()
-    # the iteration matrix's C = a0 M + a1 K_t
+    # the iteration matrix's C is that derivative
+    assert np.abs(dyn.damping_matrix(state).toarray() - fd).max() < 1e-8 * np.abs(expected).max()
     z = np.zeros(dyn.n_dof)
-    K = dyn.residual_and_tangent(state, z, z, 0.0)[1]
-    assert np.allclose(dyn.damping_matrix(K).toarray(), a0 * np.diag(dyn.mass) + a1 * K.toarray())
 
     # rigid velocities at the steady spin: the spin itself, a tumble about a tilted axis, a translation
     q = spin.state
@@ -138,7 +137,8 @@ def peaks(hist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 @pytest.mark.parametrize("part", ["mass", "stiffness", "both"])
 def test_logarithmic_decrement_matches_the_ratio(part):
     """zeta = 0.03 on the first mode: from a0 alone, a1 alone, or both (ratio at f1 and 4 f1). The measured
-    delta = ln(y_k / y_k+1) = 2 pi zeta / sqrt(1 - zeta^2) over 5 periods gives zeta within 2 %."""
+    delta = ln(y_k / y_k+1) = 2 pi zeta / sqrt(1 - zeta^2) over 5 periods gives zeta within 2 % (measured
+    0.02992 in all three cases)."""
     zeta = 0.03
     omega = first_mode(cantilever(None))[0]
     f1 = omega / (2 * np.pi)
@@ -155,15 +155,16 @@ def test_logarithmic_decrement_matches_the_ratio(part):
     if part == "both":
         _, hist0, _ = free_vibration(None)
         tp0, yp0 = peaks(hist0)
-        assert abs(np.polyfit(tp0, np.log(yp0), 1)[0]) / omega < 1e-3 * zeta * 10
+        assert abs(np.polyfit(tp0, np.log(yp0), 1)[0]) / omega < 1e-3 * zeta          # measured 3.5e-8
 
 
 def test_energy_balance_with_dissipated_work():
-    """T + W + D = E0 to the integrator's accuracy (second order in h: the trapezoidal D and the scheme), while
-    T + W alone loses most of E0."""
+    """T + W + D = E0 to the integrator's accuracy while T + W alone loses most of E0. With rho_inf = 1 the
+    per-step work of the mean damping force on the step's displacement is the scheme's own energy loss on a
+    linear system: measured 1.4e-7, 1.8e-8 of E0 at T/30, T/60 (the trapezoid of the power v . f_d: 1.0e-2,
+    2.5e-3)."""
     omega = first_mode(cantilever(None))[0]
     f1 = omega / (2 * np.pi)
-    drifts = []
     for per_period in (30, 60):
         _, _, out = free_vibration(RayleighDamping.from_ratio(0.05, (f1, 4 * f1)), 4.0, per_period)
         recs = [out.initial, *out.records]
@@ -172,9 +173,32 @@ def test_energy_balance_with_dissipated_work():
         balance = np.array([r.energy_balance for r in recs])
         assert mech[-1] < 0.3 * E0                            # exp(-2 zeta omega t): 0.08 after 4 periods
         assert out.dissipated_energy == pytest.approx(recs[-1].dissipated_energy)
-        drifts.append(np.abs(balance - E0).max() / E0)
-    assert drifts[1] < 5e-3
-    assert drifts[0] / drifts[1] > 3.5                        # second order
+        assert np.abs(balance - E0).max() < 1e-6 * E0
+
+
+@pytest.mark.parametrize("a1", [1.0, 10.0])
+def test_a_heavily_damped_cantilever_sagging_under_gravity_converges(a1):
+    """A 1 m strip (E = 1e7, h = 0.01) flopping under gravity: its geometric stiffness exceeds its bending
+    stiffness, so the iteration matrix's C must be a0 M + a1 K_m (with a1 K_t: no convergence at step 15
+    for a1 = 1 s, 257 factorizations in 30 steps for a1 = 10 s; with K_m: 41 and 49)."""
+    dyn = DynamicModel(cantilever(None).model, gravity=(0.0, 0.0, -9.81), damping=RayleighDamping(0.0, a1))
+    out = generalized_alpha(dyn, 0.3, 0.01)
+    assert out.converged, out.message
+    assert out.stats.factorizations < 100
+
+
+def test_dissipated_work_of_an_overdamped_body_stays_bounded():
+    """Stiffly overdamped modes alternate their velocity's sign from step to step (rho_inf = 1): the
+    dissipated work must stay the energy lost. The cantilever sagging under a small gravity with a1 = 1 s
+    (its first mode's ratio 0.5, the others far above 1): the balance holds to 3.4e-6 of |V_g|; the trapezoid of
+    the power v . f_d gave 2.8e-4 (and 1e283 with a1 = 1e300 s)."""
+    dyn = DynamicModel(cantilever(None).model, gravity=(0.0, 0.0, -0.1), damping=RayleighDamping(0.0, 1.0))
+    out = generalized_alpha(dyn, 0.3, 0.01, settings=AlphaSettings(rho_inf=1.0))
+    assert out.converged, out.message
+    recs = [out.initial, *out.records]
+    scale = max(abs(r.potential_energy) for r in recs)
+    balance = np.array([r.energy_balance for r in recs])
+    assert scale > 0 and np.abs(balance - balance[0]).max() < 2e-5 * scale
 
 
 # -- a spinning free plate ---------------------------------------------------------------------------------

@@ -514,7 +514,7 @@ def _build_damping(t: _Table):
             values[k] = t.number(k)
             if values[k] < 0:
                 raise t.error(k, f"must be >= 0, got {values[k]!r}")
-        return RayleighDamping(**values)
+        return _wrap(t.where, t.path, RayleighDamping, **values)
     ratio = t.number("ratio")
     if ratio < 0:
         raise t.error("ratio", f"must be >= 0, got {ratio!r}")
@@ -523,7 +523,7 @@ def _build_damping(t: _Table):
         freqs = freqs * 2
     if len(freqs) != 2 or not 0 < freqs[0] <= freqs[1]:
         raise t.error("frequencies_hz", f"must be one frequency or two 0 < f1 <= f2 (Hz), got {t.raw('frequencies_hz')!r}")
-    return RayleighDamping.from_ratio(ratio, tuple(freqs))
+    return _wrap(t.where, t.path, RayleighDamping.from_ratio, ratio, tuple(freqs))
 
 
 def _centre_of_mass(body) -> np.ndarray:
