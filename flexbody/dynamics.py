@@ -269,8 +269,7 @@ class DynamicModel:
         """r and the stiffness K_t = dr/dq (columns along q o exp(eps e_k) in this layout), CSC.
 
         K_t is the tangent of f_int - lambda f_ext; the damping force's derivative in q is left out (an
-        approximation of the iteration matrix only; its velocity derivative is :meth:`damping_matrix`).
-        The state must not carry mixed-iteration stresses (``state.stress`` None)."""
+        approximation of the iteration matrix only; its velocity derivative is :meth:`damping_matrix`)."""
         r, K = self.model.residual_and_tangent(state, self.lam(t))
         K = (K @ self._column_map(state)).tocsc()
         return self.mass * vdot + self.damping_force(state, v) + r - self._gravity_force, K
