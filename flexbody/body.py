@@ -165,6 +165,19 @@ class ShellBody:
                  for e in range(len(x_el))]
         return tuple(np.array([p[k] for p in parts]) for k in range(3))
 
+    def stress_forces(self, state: ShellState, stress: np.ndarray) -> np.ndarray:
+        """The element forces sum_g w_g B_g^T stress_g (m, 36) of given Gauss-point stress resultants
+        (m, 7, 8), in the nodal local frames, without a tangent (numba kernel; the reference kernel takes
+        :meth:`mixed_element_forces`). MITC6 variants."""
+        if self.kernel != "numba":
+            return self.mixed_element_forces(state, stress)[2]
+        if not self.supports_mixed_iteration:
+            raise ValueError("forces of given stresses are not available for tying='mitc7'")
+        x_el, fr_el, C, ref = self._element_arrays(state)
+        from flexbody.shell.element import internal_force_tangent_batch
+        return internal_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C, self._maps,
+                                            False, np.asarray(stress, dtype=float))[2]
+
     def _element_arrays(self, state: ShellState):
         """Nodal positions (m, 6, 3) and frames (m, 6, 3, 3) per element, the section, the reference data."""
         conn = self.mesh.elements
@@ -249,6 +262,7 @@ class ShellBody:
             return
         internal_force_tangent_batch(*args, True)
         internal_force_tangent_batch(*args, False)
+        internal_force_tangent_batch(*args, False, np.zeros((1, N_GAUSS, 8)))
         from flexbody.shell.element import linearized_strains_batch
         linearized_strains_batch(*args[:4], self._maps, np.zeros((1, 36)))
 

@@ -284,12 +284,11 @@ class DynamicModel:
     # -- damping -------------------------------------------------------------------------------------------
     def material_damping_force(self, state: ShellState, v: np.ndarray) -> np.ndarray:
         """f_v = B(q)^T C B(q) v on the free DoFs: the forces of the Kelvin-Voigt stresses C eps_dot of the
-        strain rates eps_dot = B v, with the element's own kernels (:meth:`ShellBody.stress_rates`, then the
-        forces of given stresses of :meth:`ShellBody.mixed_element_forces`). Zero for a rigid velocity."""
+        strain rates eps_dot = B v, with the element's own kernels (:meth:`ShellBody.stress_rates`, then
+        :meth:`ShellBody.stress_forces`). Zero for a rigid velocity."""
         body = self.model.body
         hdot = self.model.element_motions(state, self.model_increment(state, v))
-        sigma = body.stress_rates(state, hdot)
-        fe = body.mixed_element_forces(state, sigma)[2]
+        fe = body.stress_forces(state, body.stress_rates(state, hdot))
         return self.model.assemble_element_forces(state, fe)
 
     def damping_force(self, state: ShellState, v: np.ndarray) -> np.ndarray:

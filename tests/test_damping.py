@@ -53,6 +53,11 @@ def test_damping_force_derivative_and_rigid_velocities():
                           for e in np.eye(dyn.n_dof)])
     expected = a0 * np.diag(dyn.mass) + a1 * material_tangent(dyn, state)
     assert np.abs(fd - expected).max() < 1e-8 * np.abs(expected).max()
+    # the force-only path of the kernel gives the forces of the mixed iteration's given stresses
+    body = dyn.model.body
+    sigma = rng.normal(size=(body.mesh.n_elements, 7, 8))
+    f_mixed = body.mixed_element_forces(state, sigma)[2]
+    assert np.abs(body.stress_forces(state, sigma) - f_mixed).max() < 1e-12 * np.abs(f_mixed).max()
     # the iteration matrix's C is that derivative
     assert np.abs(dyn.damping_matrix(state).toarray() - fd).max() < 1e-8 * np.abs(expected).max()
     z = np.zeros(dyn.n_dof)
