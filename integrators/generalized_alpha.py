@@ -30,7 +30,7 @@ is the conserved balance of an otherwise conservative body. Per step, D += h v_m
 v_m = (v_n + v_{n+1}) / 2, f_m = (f_d,n + f_d,n+1) / 2 (``dyn.damping_force(q, v)``): the work of the mean
 damping force on the step's displacement h v_m, which for rho_inf = 1 (h dq_n = h v_m) is the scheme's own
 energy loss on a linear system (the trapezoidal rule's energy identity). The trapezoid of the power
-v . f_d instead grows without bound on stiffly overdamped modes, whose velocities alternate in sign.
+v . f_d instead overestimates it on overdamped modes, whose velocities alternate in sign.
 
 Convergence and tangent reuse: a weighted RMS norm of the correction,
 ||Dx||_w = sqrt(mean((Dx_i / (atol s_i + rtol |x_i|))^2)) with s_i the DoF scale (model size for

@@ -196,7 +196,7 @@ def test_dissipated_work_of_an_overdamped_body_stays_bounded():
     """Stiffly overdamped modes alternate their velocity's sign from step to step (rho_inf = 1): the
     dissipated work must stay the energy lost. The cantilever sagging under a small gravity with a1 = 1 s
     (its first mode's ratio 0.5, the others far above 1): the balance holds to 3.4e-6 of |V_g|; the trapezoid of
-    the power v . f_d gave 2.8e-4 (and 1e283 with a1 = 1e300 s)."""
+    the power v . f_d gave 2.8e-4."""
     dyn = DynamicModel(cantilever(None).model, gravity=(0.0, 0.0, -0.1), damping=RayleighDamping(0.0, 1.0))
     out = generalized_alpha(dyn, 0.3, 0.01, settings=AlphaSettings(rho_inf=1.0))
     assert out.converged, out.message
