@@ -38,7 +38,13 @@ def hat_many(v: np.ndarray) -> np.ndarray:
 
 
 class ModelError(ValueError):
-    """A model that cannot be solved as given (bad constraint, load on a constrained DoF, ...)."""
+    """A model that cannot be solved as given (bad constraint, every DoF fixed, loads on constrained DoFs only, ...)."""
+
+
+def _listed(indices: np.ndarray, at_most: int = 5) -> str:
+    """'3, 4, 5' or '3, 4, 5, 6, 7, ... (12 in all)'."""
+    shown = ", ".join(str(int(i)) for i in indices[:at_most])
+    return shown if len(indices) <= at_most else f"{shown}, ... ({len(indices)} in all)"
 
 
 @dataclass
@@ -73,6 +79,9 @@ class Model:
         self.has_basis = np.zeros(n, dtype=bool)
         self._apply_constraints()
         self.free = np.flatnonzero(~self.fixed.ravel())
+        if self.free.size == 0:
+            raise ModelError(f"the constraints fix every DoF of the body's {n} nodes: nothing is left to compute "
+                             "(check the node selections of the supports)")
         self._collect_loads()
         conn = self.body.mesh.elements
         self._dof6 = (6 * conn[:, :, None] + np.arange(6)).reshape(len(conn), 36)
@@ -183,21 +192,22 @@ class Model:
         self._check_loads_on_constrained()
 
     def _check_loads_on_constrained(self) -> None:
-        frames = self.body.frames0
-        for i in np.flatnonzero(np.any(self.dead != 0, axis=1) | np.any(self.follower != 0, axis=1)):
-            force = self.dead[i, :3] + frames[i] @ self.follower[i, :3]
-            moment = self.dead[i, 3:] + frames[i] @ self.follower[i, 3:]
-            trans = (self.basis[i] if self.has_basis[i] else frames[i]).T @ force
-            rot = frames[i].T @ moment
-            scale = max(np.abs(force).max(), np.abs(moment).max())
-            for k, name in enumerate(("translation 1", "translation 2", "translation 3")):
-                if self.fixed[i, k] and abs(trans[k]) > 1e-12 * scale:
-                    raise ModelError(f"load on node {i} acts on its constrained {name} "
-                                     f"(component {trans[k]:.6g}): remove the load or the constraint")
-            for k in (0, 1):
-                if self.fixed[i, 3 + k] and abs(rot[k]) > 1e-12 * scale:
-                    raise ModelError(f"moment on node {i} acts on its constrained rotation r{k + 1} "
-                                     f"(component {rot[k]:.6g}): remove the load or the constraint")
+        """Refuse nodal loads that act on constrained DoFs only: the supports would carry all of them.
+
+        A load's part on constrained DoFs (a distributed load over a supported edge, a force along a
+        fixed direction) goes to the reactions: the residual keeps the free DoFs only. Only when no part of
+        the nodal loads reaches a free DoF (and there is no pressure) is the load surely a mistake.
+        """
+        loaded = np.any(self.dead != 0, axis=1) | np.any(self.follower != 0, axis=1)
+        if self.pressures or not loaded.any():
+            return
+        f = self.external_force(self.initial_state())
+        scale = max(np.abs(self.dead).max(), np.abs(self.follower).max())
+        if np.abs(f).max() <= 1e-12 * scale:
+            nodes = np.flatnonzero(loaded)
+            raise ModelError(f"every load acts on constrained DoFs only (node{'s' if nodes.size > 1 else ''} "
+                             f"{_listed(nodes)}): the supports carry all of it and nothing moves (a moment "
+                             "about a director does no work either); load free nodes or free the constraint")
 
     # -- sizes -------------------------------------------------------------------------------------------
     @property
@@ -231,7 +241,8 @@ class Model:
         blocks[:, 3:, 3:] = hat_many(Ml)
         press = []
         for p in self.pressures:
-            F, dF, elems = pressure_contribution(self.body.mesh, state.x, p.pressure, p.elements)
+            F, dF, elems = pressure_contribution(self.body.mesh, self.body.relative_positions(state), p.pressure,
+                                                 p.elements)
             Fl = np.einsum("nji,nj->ni", R, F)
             f[:, :3] += Fl
             blocks[:, :3, 3:] += hat_many(Fl)
@@ -398,8 +409,10 @@ class Model:
                                      f"{bad.size} node(s))")
 
     # -- support ------------------------------------------------------------------------------------------
-    def unrestrained_rigid_modes(self) -> list[str]:
+    def unrestrained_rigid_modes(self, nodes: np.ndarray | None = None) -> list[str]:
         """The rigid-body motions the constraints leave free, described in words (empty: fully supported).
+
+        ``nodes``: the nodes of one piece of the mesh (its rigid motions); None: the whole body.
 
         A rigid motion is a translation t and a rotation w about the model centre c: delta x_I = t + w x
         (x_I - c), and the in-plane nodal rotations are the components of w along t1_I, t2_I. It is free
@@ -407,12 +420,13 @@ class Model:
         of the constrained components as linear functions of (t, w). Without drilling DoFs a rotation of the
         body about a nodal director is not a nodal rotation DoF, so it is restrained only by translations.
         """
+        nodes = np.arange(self.body.n_nodes) if nodes is None else np.asarray(nodes)
         x = self.body.mesh.nodes
         frames = self.body.frames0
-        c = x.mean(axis=0)
-        size = float(np.ptp(x, axis=0).max()) or 1.0
+        c = x[nodes].mean(axis=0)
+        size = float(np.ptp(x[nodes], axis=0).max()) or 1.0
         rows = []
-        for i in np.flatnonzero(self.fixed[:, :5].any(axis=1)):
+        for i in nodes[self.fixed[nodes, :5].any(axis=1)]:
             p = (x[i] - c) / size
             trans = np.hstack([np.eye(3), -hat_many(p[None])[0]])      # delta x / size per unit (t, w)
             if self.fixed[i, :3].all():
@@ -444,10 +458,23 @@ class Model:
 
     def check_static_support(self) -> None:
         """Raise ModelError if the constraints leave a rigid-body motion free: the stiffness is then singular
-        and no static equilibrium can be computed."""
-        modes = self.unrestrained_rigid_modes()
-        if modes:
-            what = "no constraints" if not self.constraints else "constraints that leave it free to move"
-            raise ModelError(f"the body has {what}: rigid-body motions are not restrained "
-                             f"({'; '.join(modes)}), so the static stiffness is singular; add supports "
-                             "(Fix / Symmetry) that stop every rigid-body motion")
+        and no static equilibrium can be computed.
+
+        A mesh of several separate pieces is checked piece by piece: each must be supported on its own.
+        """
+        count, labels = self.body.mesh.connected_components()
+        for piece in range(count):
+            nodes = np.flatnonzero(labels == piece)
+            modes = self.unrestrained_rigid_modes(nodes if count > 1 else None)
+            if not modes:
+                continue
+            if count == 1:
+                what = "no constraints" if not self.constraints else "constraints that leave it free to move"
+                body = f"the body has {what}"
+            else:
+                held = self.fixed[nodes, :5].any()
+                body = (f"the mesh has {count} separate pieces, and piece {piece + 1} ({nodes.size} nodes, e.g. node "
+                        f"{nodes[0]}) has {'constraints that leave it free to move' if held else 'no supports'}")
+            raise ModelError(f"{body}: rigid-body motions are not restrained ({'; '.join(modes)}), so the static "
+                             "stiffness is singular; add supports (Fix / Symmetry) that stop every rigid-body "
+                             "motion")

@@ -21,16 +21,42 @@ from flexbody.shell.mitc6 import N_TYING
 
 @dataclass
 class ShellState:
-    """Nodal configuration: positions x_I (n, 3) and frames R_I (n, 3, 3); director t_I = R_I e3."""
+    """Nodal configuration: positions x_I (n, 3) and frames R_I (n, 3, 3); director t_I = R_I e3.
+
+    ``x`` is in the user's coordinates. The solvers compute with the positions relative to a model origin
+    (:func:`model_origin`), ``local``, which the state carries at full precision: far from the origin
+    (x ~ 1e5 L) the rounding of x itself (1e-11 L) would be membrane-strain noise far above a thin shell's
+    bending forces. ``x`` is ``local + origin`` rounded; a node whose ``x`` was written directly since
+    takes ``x - origin`` (:meth:`relative_positions`).
+    """
 
     x: np.ndarray
     frames: np.ndarray
     #: Stress resultants (m, 7, 8) at the Gauss points iterated as unknowns of their own by the mixed Newton
     #: iteration (:meth:`ShellBody.stresses`); None outside it. Only the iteration matrix reads them.
     stress: np.ndarray | None = None
+    local: np.ndarray | None = None    # positions relative to ``origin`` (None: x - origin)
+    origin: np.ndarray | None = None   # (3,) the model origin (None: the coordinate origin)
+
+    def __post_init__(self) -> None:
+        if self.origin is None:
+            self.origin = np.zeros(3)
+        if self.local is None:
+            self.local = np.asarray(self.x, dtype=float) - self.origin
 
     def copy(self) -> "ShellState":
-        return ShellState(self.x.copy(), self.frames.copy(), None if self.stress is None else self.stress.copy())
+        return ShellState(self.x.copy(), self.frames.copy(), None if self.stress is None else self.stress.copy(),
+                          self.local.copy(), self.origin)
+
+    def relative_positions(self, origin: np.ndarray | None = None) -> np.ndarray:
+        """The positions relative to ``origin`` (default: the state's own), at full precision where the
+        state carries them (``local``, for the nodes whose ``x`` was not written directly since)."""
+        if origin is not None and not np.array_equal(origin, self.origin):
+            return self.x - origin
+        stale = np.any(self.x != self.local + self.origin, axis=1)
+        if stale.any():
+            self.local[stale] = self.x[stale] - self.origin
+        return self.local
 
     @property
     def directors(self) -> np.ndarray:
@@ -46,13 +72,27 @@ class ReferenceGeometry:
     weights: np.ndarray    # (m, 7)
 
 
-def build_reference(mesh: Tri6Mesh, frames0: np.ndarray) -> ReferenceGeometry:
+def model_origin(nodes: np.ndarray) -> np.ndarray:
+    """The origin the body computes from: the centre of the nodes' bounding box, rounded to a multiple of
+    q = 2^ceil(log2(size)) (q >= the model size). Relative coordinates are then at most 1.5 q, the
+    subtraction nodes - origin is exact for a model far from the coordinate origin, and a model near it
+    (centre within q / 2) keeps the origin 0 (bit for bit its old results)."""
+    nodes = np.asarray(nodes, dtype=float)
+    size = float(np.ptp(nodes, axis=0).max()) or 1.0
+    q = 2.0 ** np.ceil(np.log2(size))
+    centre = 0.5 * (nodes.min(axis=0) + nodes.max(axis=0))
+    return np.round(centre / q) * q + 0.0
+
+
+def build_reference(mesh: Tri6Mesh, frames0: np.ndarray, origin: np.ndarray | None = None) -> ReferenceGeometry:
+    """The elements' reference data, from the node positions relative to ``origin`` (default 0)."""
     m = mesh.n_elements
     e_ref = np.zeros((m, N_TYING + N_GAUSS, 8))
     to_cart = np.zeros((m, N_GAUSS, 8, 8))
     weights = np.zeros((m, N_GAUSS))
+    nodes = mesh.nodes if origin is None else mesh.nodes - origin
     for e, conn in enumerate(mesh.elements):
-        g = element_geometry(mesh.nodes[conn], frames0[conn])
+        g = element_geometry(nodes[conn], frames0[conn])
         e_ref[e], to_cart[e], weights[e] = g.e_ref, g.to_cart, g.weights
     return ReferenceGeometry(e_ref, to_cart, weights)
 
@@ -79,6 +119,7 @@ class ShellBody:
     kernel: str = "numba"
     frames0: np.ndarray = field(init=False)
     reference: ReferenceGeometry = field(init=False, repr=False)
+    origin: np.ndarray = field(init=False)   # the model origin of the computation (:func:`model_origin`)
 
     def __post_init__(self) -> None:
         if not isinstance(self.mesh, Tri6Mesh):
@@ -88,7 +129,8 @@ class ShellBody:
         if self.kernel not in ("numba", "reference"):
             raise ValueError(f"kernel must be 'numba' or 'reference', got {self.kernel!r}")
         self.frames0 = frames_from_directors(self.mesh.directors, self.frame_axis)
-        self.reference = build_reference(self.mesh, self.frames0)
+        self.origin = model_origin(self.mesh.nodes)
+        self.reference = build_reference(self.mesh, self.frames0, self.origin)
         self._maps = assumed_strain_maps(self.tying)
         # MITC7: the condensed rotation bubbles of the last evaluation, the warm start of the next one
         # (the results do not depend on it beyond the bubble tolerance, flexbody.shell.bubble)
@@ -107,11 +149,12 @@ class ShellBody:
         """Override reference frames of some nodes (e.g. to align with a symmetry plane) and rebuild."""
         self.frames0 = self.frames0.copy()
         self.frames0[nodes] = frames
-        self.reference = build_reference(self.mesh, self.frames0)
+        self.reference = build_reference(self.mesh, self.frames0, self.origin)
 
     # -- state -------------------------------------------------------------------------------------------
     def initial_state(self) -> ShellState:
-        return ShellState(self.mesh.nodes.astype(float).copy(), self.frames0.copy())
+        x = self.mesh.nodes.astype(float)
+        return ShellState(x.copy(), self.frames0.copy(), local=x - self.origin, origin=self.origin)
 
     @property
     def n_nodes(self) -> int:
@@ -181,7 +224,11 @@ class ShellBody:
     def _element_arrays(self, state: ShellState):
         """Nodal positions (m, 6, 3) and frames (m, 6, 3, 3) per element, the section, the reference data."""
         conn = self.mesh.elements
-        return state.x[conn], state.frames[conn], self.material.section(), self.reference
+        return self.relative_positions(state)[conn], state.frames[conn], self.material.section(), self.reference
+
+    def relative_positions(self, state: ShellState) -> np.ndarray:
+        """The state's positions relative to the model origin (n, 3): what the elements compute with."""
+        return state.relative_positions(self.origin)
 
     def _geometry(self, e: int):
         from flexbody.shell.geometry import ElementGeometry
@@ -272,15 +319,16 @@ class ShellBody:
         C = self.material.section()
         ref = self.reference
         conn = self.mesh.elements
+        x = self.relative_positions(state)
         if self.tying == "mitc7":
             # the bubbles in equilibrium with this state: the (cheap, warm-started) force-only evaluation
             self.element_forces(state, want_tangent=False)
-            eps = np.array([element_strains(state.x[c], state.frames[c], self._geometry(e), "mitc7",
+            eps = np.array([element_strains(x[c], state.frames[c], self._geometry(e), "mitc7",
                                             self._bubbles[e]) for e, c in enumerate(conn)])
             return 0.5 * float(np.einsum("eg,egi,ij,egj->", ref.weights, eps, C, eps))
         total = 0.0
         for e, c in enumerate(conn):
-            total += strain_energy(state.x[c], state.frames[c], self._geometry(e), C, self.tying)
+            total += strain_energy(x[c], state.frames[c], self._geometry(e), C, self.tying)
         return total
 
 
@@ -295,7 +343,8 @@ def update_state(state: ShellState, du: np.ndarray, dtheta: np.ndarray,
     dx = np.einsum("nij,nj->ni", state.frames, du)
     if global_translation is not None:
         dx[global_translation] = du[global_translation]
-    new.x += dx
+    new.local = state.relative_positions() + dx       # at full precision, relative to the model origin
+    new.x = new.local + new.origin
     dtheta = np.ascontiguousarray(dtheta, dtype=float)
     if dtheta.shape != (len(du), 2):
         raise ValueError(f"dtheta must have shape ({len(du)}, 2), got {dtheta.shape}")

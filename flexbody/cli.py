@@ -135,11 +135,25 @@ def _open(name: str):
 
 
 def _build(source, params: dict):
+    """The scene of ``source`` with ``params``; a bad scene, or a static one whose supports leave a rigid
+    motion free (checked now, before the kernels compile), is a CliError; a mesh of several separate pieces
+    is a note on stderr (each piece moves on its own)."""
+    import numpy as np
+
+    from flexbody.assembly import ModelError
     from flexbody.scenes.sources import SceneError
     try:
-        return source.build(params)
-    except SceneError as exc:
+        scene = source.build(params)
+        if scene.kind == "static":
+            scene.model.check_static_support()
+    except (SceneError, ModelError) as exc:
         raise CliError(str(exc)) from None
+    count, labels = scene.model.body.mesh.connected_components()
+    if count > 1:
+        sizes = np.bincount(labels)
+        print(f"note: the mesh of {scene.name} has {count} separate pieces (nodes per piece: "
+              f"{', '.join(map(str, sizes[:10]))}{', ...' if count > 10 else ''})", file=sys.stderr)
+    return scene
 
 
 def _write_json(path: str, data) -> None:

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexbody.frames import unit_vector
+
 _AXES = {"x": 0, "y": 1, "z": 2}
 
 
@@ -79,10 +81,7 @@ class Symmetry:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "nodes", node_indices(self.nodes, "Symmetry"))
-        n = np.asarray(self.normal, dtype=float)
-        if n.shape != (3,) or not np.all(np.isfinite(n)) or np.linalg.norm(n) == 0:
-            raise ValueError(f"symmetry normal must be a nonzero finite 3-vector, got {self.normal!r}")
-        object.__setattr__(self, "normal", n / np.linalg.norm(n))
+        object.__setattr__(self, "normal", unit_vector(self.normal, "symmetry normal"))
 
 
 @dataclass(frozen=True)
@@ -106,7 +105,7 @@ class FixDirection:
 
 def basis_with_first(direction: np.ndarray) -> np.ndarray:
     """An orthonormal basis (columns) whose first vector is ``direction``."""
-    d = direction / np.linalg.norm(direction)
+    d = unit_vector(direction, "direction")
     helper = np.eye(3)[int(np.argmin(np.abs(d)))]
     b = np.cross(d, helper)
     b /= np.linalg.norm(b)

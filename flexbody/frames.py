@@ -10,6 +10,28 @@ from __future__ import annotations
 import numpy as np
 
 
+def unit_vector(vector, name: str) -> np.ndarray:
+    """``vector / |vector|`` for a user direction (a plane normal, an axis, an output direction).
+
+    The vector is divided by its largest component first, so that huge components (1e300) do not overflow
+    the norm into inf (which made the unit vector zero) and tiny ones do not underflow it into zero.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name`` and the value, if it is not a finite nonzero 3-vector.
+    """
+    try:
+        v = np.asarray(vector, dtype=float)
+    except (TypeError, ValueError):
+        v = None
+    if v is None or v.shape != (3,) or not np.all(np.isfinite(v)) or not np.abs(v).max() > 0:
+        shown = vector.tolist() if isinstance(vector, np.ndarray) else vector
+        raise ValueError(f"{name} must be a finite nonzero 3-vector, got {shown!r}")
+    v = v / np.abs(v).max()
+    return v / np.linalg.norm(v)
+
+
 def default_frame_axis(directors: np.ndarray) -> np.ndarray:
     """The global axis (x, y or z) whose largest |cos| with the directors is smallest."""
     worst = np.abs(directors).max(axis=0)
@@ -21,8 +43,7 @@ def default_frame_axis(directors: np.ndarray) -> np.ndarray:
 def frames_from_directors(directors: np.ndarray, axis: np.ndarray | None = None) -> np.ndarray:
     """Frames (n, 3, 3) with third column the director and first column the projected ``axis``."""
     directors = np.asarray(directors, dtype=float)
-    axis = default_frame_axis(directors) if axis is None else np.asarray(axis, dtype=float)
-    axis = axis / np.linalg.norm(axis)
+    axis = default_frame_axis(directors) if axis is None else unit_vector(axis, "frame axis")
     t1 = axis - (directors @ axis)[:, None] * directors
     norm = np.linalg.norm(t1, axis=1)
     if np.any(norm < 1e-6):
@@ -41,7 +62,7 @@ def align_frame(frame: np.ndarray, direction: np.ndarray, node: int) -> tuple[np
     An axis already within 1e-8 of the direction is kept, so frames stay unchanged where they fit.
     """
     n = frame[:, 2]
-    direction = np.asarray(direction, float) / np.linalg.norm(direction)
+    direction = unit_vector(direction, "symmetry plane normal")
     if abs(direction @ n) > 1e-6:
         raise ValueError(f"symmetry plane normal {direction.tolist()} is not tangent to the shell at node "
                          f"{node} (director {n.tolist()}): the node cannot lie on that symmetry plane")

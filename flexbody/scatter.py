@@ -14,18 +14,36 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from flexbody.kernel_arrays import kernel_input, kernel_output
 from flexbody.kernel_cache import CACHE
 
 
-@numba.njit(cache=CACHE, nogil=True)
 def scatter_blocks(K: np.ndarray, S: np.ndarray, C: np.ndarray, slots: np.ndarray, scale: float,
                    out: np.ndarray) -> None:
     """out[slots] += scale * (S K C) per block.
 
     K : (m, 6k, 6k) blocks, node-major; S, C : (m, k, 3, 3) row and column maps of the block's nodes;
-    slots : (m, 6k, 6k) int64 indices into ``out`` (-1 where the entry is not assembled).
+    slots : (m, 6k, 6k) int64 indices into ``out`` (-1 where the entry is not assembled); out : a writeable
+    float64 vector. The shapes are checked before the kernel runs (:mod:`flexbody.kernel_arrays`), a slot
+    beyond ``out`` stops the kernel with an IndexError.
     """
-    m, nk = K.shape[0], S.shape[1]
+    size = np.shape(K)[1] if np.ndim(K) == 3 else 0
+    if size == 0 or size % 6 or np.shape(K)[2] != size:
+        raise ValueError(f"K must have shape (m, 6k, 6k), got {np.shape(K)}")
+    K = kernel_input(K, (size, size), "K")
+    m, k = len(K), size // 6
+    S = kernel_input(S, (k, 3, 3), "S", rows=m)
+    C = kernel_input(C, (k, 3, 3), "C", rows=m)
+    slots = kernel_input(slots, (size, size), "slots", rows=m, dtype=np.int64)
+    if isinstance(scale, bool) or not isinstance(scale, (int, float)):
+        raise ValueError(f"scale must be a number, got {scale!r}")
+    _scatter_blocks(K, S, C, slots, float(scale), kernel_output(out, (None,), "out"))
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _scatter_blocks(K: np.ndarray, S: np.ndarray, C: np.ndarray, slots: np.ndarray, scale: float,
+                    out: np.ndarray) -> None:
+    m, nk, n_out = K.shape[0], S.shape[1], out.shape[0]
     T = np.empty((6, 6))
     for e in range(m):
         for a in range(nk):
@@ -47,4 +65,6 @@ def scatter_blocks(K: np.ndarray, S: np.ndarray, C: np.ndarray, slots: np.ndarra
                     for j in range(6):
                         s = slots[e, 6 * a + i, 6 * b + j]
                         if s >= 0:
+                            if s >= n_out:
+                                raise IndexError("scatter_blocks: a slot lies beyond the output array")
                             out[s] += scale * T[i, j]

@@ -100,7 +100,7 @@ class AlphaParameters:
 class AlphaSettings:
     rho_inf: float = 0.9
     rtol: float = 1e-8            # weighted RMS norm: relative part (of the step increment)
-    atol: float = 1e-10           # absolute part, times the DoF scale
+    atol: float = 1e-10           # the floor, times the DoF scale (model size, 1 rad): scale-free too
     max_iterations: int = 20
     policy: str = "modified"      # "modified" (reuse the iteration matrix) or "full" (refresh every iteration)
     refresh_ratio: float = 0.3    # refresh the iteration matrix when the contraction ratio exceeds this
@@ -111,8 +111,12 @@ class AlphaSettings:
     def __post_init__(self) -> None:
         if self.policy not in ("full", "modified"):
             raise ValueError(f"policy must be 'full' or 'modified', got {self.policy!r}")
-        if not (self.rtol > 0 and self.atol > 0 and self.max_iterations >= 1):
-            raise ValueError("rtol, atol must be > 0 and max_iterations >= 1")
+        if not 0 < self.rtol < 1:
+            raise ValueError(f"rtol must lie in (0, 1) (a fraction of the step increment), got {self.rtol!r}")
+        if not 0 < self.atol < 1:
+            raise ValueError(f"atol must lie in (0, 1) (a fraction of the model size), got {self.atol!r}")
+        if not self.max_iterations >= 1:
+            raise ValueError(f"max_iterations must be >= 1, got {self.max_iterations!r}")
         if self.max_cutbacks < 0:
             raise ValueError(f"max_cutbacks must be >= 0, got {self.max_cutbacks!r}")
 

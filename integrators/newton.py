@@ -23,8 +23,7 @@ from integrators.linear import LinearSolver, SingularMatrixError
 
 @dataclass
 class NewtonSettings:
-    rtol: float = 1e-8            # ||r|| <= rtol * reference force
-    atol: float = 1e-12           # absolute floor on ||r||
+    rtol: float = 1e-8            # ||r|| <= rtol * reference force (the model's own: no absolute floor)
     increment_tol: float = 1e-11  # or: max |dq_i / scale_i| <= increment_tol (round-off floor reached)
     max_iterations: int = 25
     policy: str = "full"          # "full" or "modified"
@@ -48,8 +47,11 @@ class NewtonSettings:
     def __post_init__(self) -> None:
         if self.policy not in ("full", "modified"):
             raise ValueError(f"Newton policy must be 'full' or 'modified', got {self.policy!r}")
-        if not (self.rtol > 0 and self.max_iterations >= 1):
-            raise ValueError("Newton rtol must be > 0 and max_iterations >= 1")
+        if not 0 < self.rtol < 1:
+            raise ValueError(f"Newton rtol must lie in (0, 1) (a fraction of the reference force), "
+                             f"got {self.rtol!r}")
+        if not self.max_iterations >= 1:
+            raise ValueError(f"Newton max_iterations must be >= 1, got {self.max_iterations!r}")
         if not isinstance(self.mixed, bool):
             raise ValueError(f"Newton mixed must be true or false, got {self.mixed!r}")
         if not (self.lazy_tangent >= 0):
@@ -81,6 +83,14 @@ class NewtonOutcome:
     factorizations: int = 0       # made in this solve
 
 
+def work_norm(r: np.ndarray, dof_scale=1.0) -> float:
+    """||r * dof_scale||: a residual (or force) weighted by the DoF scale -- forces times the model size,
+    moments times 1 rad -- so that forces and moments add up in one unit (the virtual work per unit scaled
+    DoF). Every force test of the static solvers is in this norm: a model in other units (lengths times s,
+    forces times s^2, moments times s^3) has the same relative residuals."""
+    return float(np.linalg.norm(r * dof_scale))
+
+
 def _first_non_finite(r: np.ndarray) -> str:
     bad = np.flatnonzero(~np.isfinite(r))
     return f"first at equation {int(bad[0])}" if bad.size else "its norm overflows"
@@ -89,12 +99,19 @@ def _first_non_finite(r: np.ndarray) -> str:
 def newton_solve(state, residual: Callable, residual_and_tangent: Callable, update: Callable,
                  reference_norm: float, settings: NewtonSettings, solver: LinearSolver,
                  stats: NewtonStats, fresh_tangent: bool = True, dof_scale=1.0,
-                 conjugate: Callable | None = None, held_lag: float = float("inf")):
+                 conjugate: Callable | None = None, held_lag: float = float("inf"),
+                 load: np.ndarray | None = None, min_iterations: int = 0):
     """Solve r(q) = 0 from ``state``; returns (state, outcome). Never returns a non-finite state.
 
-    Converged when ||r|| <= max(rtol * reference_norm, atol), or when an increment scaled by ``dof_scale``
-    (a length for translations, 1 for rotations) is below ``increment_tol``: the residual has then reached
-    its round-off floor, which for thin shells (membrane stiffness >> bending load) can lie above rtol.
+    Converged when ||r|| <= rtol * reference (norms weighted by ``dof_scale``, :func:`work_norm`), or when
+    an increment scaled by ``dof_scale`` (a length for translations, 1 for rotations) is below
+    ``increment_tol``: the residual has then reached its round-off floor, which for thin shells (membrane
+    stiffness >> bending load) can lie above rtol. The reference is the model's own force scale, never an
+    absolute number: ``reference_norm`` (the weighted norm of the step's external load) or, with ``load``
+    (that external load vector, r = f_int - load), the norm of the iterate's internal forces f_int = r + load
+    if larger. So the tests are scale-free: a model in other units (forces, lengths) takes the same
+    iterations. A step whose load changed needs at least ``min_iterations`` corrections (1: never
+    "converged" without moving).
     ``solver`` may hold a factorization from earlier iterations or steps: it serves the first iteration
     unless ``fresh_tangent`` (the static solvers pass False under the "full" policy only when it was
     computed within ``lazy_tangent`` of the start: the last iterates of the previous step); ``held_lag`` is
@@ -120,8 +137,7 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
     (Measured on the load-control benchmarks it still costs 1.7-26x the iterations of plain Newton,
     docs/performance.md: it is off by default.)
     """
-    scale = max(reference_norm, settings.atol)
-    tol = max(settings.rtol * scale, settings.atol)
+    tol = settings.rtol * reference_norm
     outcome = NewtonOutcome(False, 0)
     need_tangent = fresh_tangent or not solver.ready
     lag = held_lag
@@ -141,7 +157,7 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
             outcome.reason = f"non-finite values at iteration {it}: {exc}"
             outcome.non_finite, outcome.iterations = True, it
             return state, outcome
-        norm = float(np.linalg.norm(r))
+        norm = work_norm(r, dof_scale)
         if not np.isfinite(norm):
             outcome.reason = f"non-finite residual at iteration {it} ({_first_non_finite(r)})"
             outcome.non_finite, outcome.iterations = True, it
@@ -149,7 +165,9 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
         if not reevaluated:
             outcome.residuals.append(norm)
         reevaluated = False
-        if norm <= tol:
+        if load is not None:
+            tol = settings.rtol * max(reference_norm, work_norm(r + load, dof_scale))
+        if norm <= tol and it >= min_iterations:
             outcome.converged = True
             outcome.iterations = it
             outcome.factorization_lag = lag
@@ -209,7 +227,7 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
                 r_new = None
             stats.residual_evaluations += 1
         finite = r_new is not None and bool(np.all(np.isfinite(r_new)))
-        norm_new = float(np.linalg.norm(r_new)) if finite else float("inf")
+        norm_new = work_norm(r_new, dof_scale) if finite else float("inf")
         # modified Newton, and full Newton on a factorization computed within lazy_tangent: keep it while
         # the residual contracts (a converged residual is reported by the next iteration)
         need_tangent = not (norm_new <= tol or norm_new < settings.refresh_ratio * norm)

@@ -8,6 +8,7 @@ converged state.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 import time
 from typing import Callable
@@ -15,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 from integrators.linear import LinearSolver, SingularMatrixError
-from integrators.newton import NewtonSettings, NewtonStats, newton_solve
+from integrators.newton import NewtonSettings, NewtonStats, newton_solve, work_norm
 
 
 @dataclass
@@ -42,6 +43,7 @@ class FailureReport:
     attempts: int                      # attempts at this step (1 + its cut-backs, + 1 for a failed
                                        # secant-predicted start)
     non_finite: bool = False
+    limit_point: float | None = None   # load control: the load factor of the limit point that stopped it
 
 
 @dataclass
@@ -60,8 +62,11 @@ class StaticResult:
 MAX_EXTRAPOLATION = 2.0   # the secant predictor extrapolates at most twice the previous step
 
 
-def _reference_norm(model, state, lam: float) -> float:
-    return abs(lam) * float(np.linalg.norm(model.external_force(state))) or 1.0
+def _step_load(model, state, lam: float) -> tuple[np.ndarray, float]:
+    """The external load lam f_ext(q) of a step and its norm: with the internal forces, the force scale of
+    the convergence tests (:func:`integrators.newton.newton_solve`; never an absolute number)."""
+    load = lam * model.external_force(state)
+    return load, work_norm(load, model.dof_scale)
 
 
 def _check_support(model) -> None:
@@ -77,7 +82,10 @@ def _history(residuals) -> list[str]:
 
 
 def _failure_message(f: FailureReport) -> str:
-    return (f"step {f.step} to load factor {f.trial_load_factor:.6g} failed ({f.reason}) after {f.attempts} "
+    hint = "" if f.limit_point is None else (
+        f"limit point at load factor {f.limit_point:.6g}: load control cannot pass it (the tangent turns "
+        "singular along the load); use arc length (analysis method \"arc_length\"). ")
+    return hint + (f"step {f.step} to load factor {f.trial_load_factor:.6g} failed ({f.reason}) after {f.attempts} "
             f"attempt(s); residual history of the last attempt {_history(f.residuals)}; stopped at the last "
             f"converged load factor {f.load_factor:.6g} (state kept)")
 
@@ -94,6 +102,116 @@ def _mixed(model, settings: NewtonSettings) -> bool:
 def _with_stresses(model, state, settings: NewtonSettings):
     """The start of a step: under the mixed iteration, the state with the stresses of its strains."""
     return model.with_stresses(state) if _mixed(model, settings) else state
+
+
+ARC_LENGTH_OPTIONS = ("max_steps", "min_increment_ratio", "max_increment_ratio", "desired_iterations")
+
+
+def check_arc_length_options(**options) -> dict:
+    """Check the step-length controls of :func:`arc_length` (``ARC_LENGTH_OPTIONS``; a scene's
+    ``[analysis]`` keys of the same names) and return them; a ValueError names the first bad one."""
+    for name, value in options.items():
+        integer = name in ("max_steps", "desired_iterations")
+        if name not in ARC_LENGTH_OPTIONS:
+            raise ValueError(f"unknown arc-length option {name!r}; options: {', '.join(ARC_LENGTH_OPTIONS)}")
+        if integer and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1):
+            raise ValueError(f"arc-length {name} must be an integer >= 1, got {value!r}")
+        if not integer and (isinstance(value, bool) or not isinstance(value, (int, float))
+                            or not np.isfinite(value)):
+            raise ValueError(f"arc-length {name} must be a finite number, got {value!r}")
+        if name == "min_increment_ratio" and not 0 < value < 1:
+            raise ValueError(f"arc-length min_increment_ratio must lie in (0, 1), got {value!r}")
+        if name == "max_increment_ratio" and not value >= 1:
+            raise ValueError(f"arc-length max_increment_ratio must be >= 1, got {value!r}")
+    return options
+
+
+def _scaled_size(model, dq: np.ndarray) -> float:
+    """max |dq_i / scale_i|: a correction in units of the model size (translations) and radians."""
+    return float(np.max(np.abs(dq / model.dof_scale)))
+
+
+def _scaled_norm(model, dq: np.ndarray) -> float:
+    """||dq / scale||: the length of an increment in units of the model size (translations) and radians."""
+    return float(np.linalg.norm(dq / model.dof_scale))
+
+
+def _arc_tolerance(settings: NewtonSettings, r: np.ndarray, f: np.ndarray, trial_lam: float, lam: float,
+                   scale) -> float:
+    """The arc-length corrector's force tolerance, relative to the model's own forces (never an absolute
+    number): the external load of the step (at its start and at the iterate) and the iterate's internal
+    forces f_int = r + lam f, in the norm weighted by the DoF scale (:func:`integrators.newton.work_norm`)."""
+    load = max(abs(trial_lam), abs(lam)) * work_norm(f, scale)
+    return settings.rtol * max(load, work_norm(r + trial_lam * f, scale))
+
+
+def _arc_correction(solver: LinearSolver, r: np.ndarray, f: np.ndarray, Dq: np.ndarray, dl: float,
+                    scale) -> tuple[np.ndarray, float]:
+    """Crisfield's corrector on the factorization held: dq = a + x b with K a = -r, K b = f, and x the
+    root of ||(Dq + dq) / scale||^2 = dl^2 that keeps the step closest to its direction (the closest point
+    if the constraint has no root); returns (dq, x). The arc is measured in units of the model size
+    (translations) and radians (``scale``, the DoF scale): the same path in any units."""
+    a = solver.solve(-r)
+    b = solver.solve(f)
+    u, bs, Ds = (Dq + a) / scale, b / scale, Dq / scale
+    c2, c1, c0 = bs @ bs, 2 * u @ bs, u @ u - dl * dl
+    disc = c1 * c1 - 4 * c2 * c0
+    if disc < 0:  # no intersection: take the closest point
+        x = -c1 / (2 * c2)
+    else:
+        roots = [(-c1 + s * np.sqrt(disc)) / (2 * c2) for s in (1.0, -1.0)]
+        x = max(roots, key=lambda z: (Ds @ (u + z * bs)))
+    return a + x * b, float(x)
+
+
+def _at_round_off_floor(model, solver: LinearSolver, r: np.ndarray, f: np.ndarray, Dq: np.ndarray, dl: float,
+                        settings: NewtonSettings) -> bool:
+    """Whether the corrector's next correction, on the factorization held (computed within lazy_tangent of
+    the iterate), is below ``increment_tol``: the residual is then at its round-off floor, which on a thin
+    shell can lie above the force tolerance (the arc-length twin of Newton's test)."""
+    try:
+        dq, _ = _arc_correction(solver, r, f, Dq, dl, model.dof_scale)
+    except (SingularMatrixError, FloatingPointError):
+        return False
+    return _scaled_size(model, dq) <= settings.increment_tol
+
+
+def _load_compliance(model, state, lam: float) -> float:
+    """c = f . K^-1 f at an equilibrium (f paired with the increment by virtual work, ``model.conjugate``):
+    the compliance of the load path, dW/dlam per unit load. It grows without bound at a limit point,
+    where the tangent turns singular along the load, and changes sign beyond it (at a bifurcation, where the
+    buckling mode is orthogonal to the load, it stays bounded)."""
+    if getattr(state, "stress", None) is not None:
+        state = dataclasses.replace(state, stress=None)   # the tangent itself, not a mixed iteration matrix
+    _, K = model.residual_and_tangent(state, lam)
+    solver = LinearSolver()
+    solver.factorize(K)
+    f = model.external_force(state)
+    v = solver.solve(f)
+    conjugate = getattr(model, "conjugate", None)
+    return float((conjugate(state, v) if conjugate is not None else v) @ f)
+
+
+def _limit_point(model, previous, last, trial: float) -> float | None:
+    """The load factor of a limit point that stops load control in the step from ``last`` to ``trial``, or
+    None if the failure has another cause.
+
+    ``previous`` and ``last`` are the last two converged (state, load factor). Near a limit point lam_L the
+    path is lam_L - lam ~ s^2 along its arc length s, so the compliance c = f . K^-1 f grows like
+    (lam_L - lam)^(-1/2): 1 / c^2 falls linearly to 0 at lam_L. Extrapolated from the two points, a limit
+    point is reported if it lies before the failed trial (one more step's length of slack for the
+    extrapolation).
+    """
+    (q0, lam0), (q1, lam1) = previous, last
+    try:
+        c0, c1 = _load_compliance(model, q0, lam0), _load_compliance(model, q1, lam1)
+    except (FloatingPointError, SingularMatrixError):
+        return None
+    if not (c1 > c0 > 0 and lam1 > lam0):
+        return None
+    g0, g1 = 1.0 / c0**2, 1.0 / c1**2
+    lam_limit = lam1 + (lam1 - lam0) * g1 / (g0 - g1)
+    return lam_limit if lam_limit <= trial + (trial - lam1) else None
 
 
 def load_control(model, load_factors=None, *, n_steps: int = 10, settings: NewtonSettings | None = None,
@@ -123,6 +241,9 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
     computed within ``settings.lazy_tangent`` of the converged state (the last iterates of a converged
     step): the first correction is then the tangent predictor to a relative O(lazy_tangent), for a
     tangent that does not depend on the load factor (dead forces), and a modified-Newton step otherwise.
+
+    A run that stops at a limit point says so (``FailureReport.limit_point``, :func:`_limit_point`): "limit
+    point at load factor X: ...; use arc length".
     """
     settings = settings or NewtonSettings()
     targets = np.linspace(0, 1, n_steps + 1)[1:] if load_factors is None else np.asarray(load_factors, float)
@@ -148,6 +269,7 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
     attempts = 0
     held_lag = float("inf")            # distance of the state from the factorization held (scaled increments)
     prev_increment, prev_dlam, use_predictor = None, 0.0, predictor == "secant"
+    previous = None                    # the converged (state, load factor) before the last one
     for target in targets:
         while lam < target - 1e-14:
             # land exactly on the prescribed level (no sliver step, no level missed by round-off)
@@ -155,9 +277,9 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
             attempts += 1
             early = ""
             try:
-                reference = _reference_norm(model, state, trial)
+                load, reference = _step_load(model, state, trial)
             except FloatingPointError as exc:
-                reference, early = np.nan, str(exc)
+                load, reference, early = None, np.nan, str(exc)
             start, shift = _with_stresses(model, state, settings), None
             if np.isfinite(reference) and use_predictor and prev_increment is not None:
                 shift = min((trial - lam) / prev_dlam, MAX_EXTRAPOLATION) * prev_increment
@@ -176,7 +298,8 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
                 new_state, out = newton_solve(
                     start, lambda q: model.residual(q, trial), lambda q: model.residual_and_tangent(q, trial),
                     model.update, reference, settings, solver, stats, fresh_tangent=not reuse,
-                    dof_scale=model.dof_scale, conjugate=model.conjugate, held_lag=held_lag)
+                    dof_scale=model.dof_scale, conjugate=model.conjugate, held_lag=held_lag, load=load,
+                    min_iterations=1)
             held_lag = float("inf")
             if out is None or not out.converged:
                 if shift is not None:
@@ -195,8 +318,11 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
                 if step < min_step or not adaptive or at_start:
                     if at_start:
                         reason += "; non-finite at the start of the step, from the last converged state: stopped at once"
+                    limit = None
+                    if not at_start and previous is not None:
+                        limit = _limit_point(model, previous, (state, lam), trial)
                     failure = FailureReport(len(records) + 1, lam, trial, list(residuals), reason, attempts,
-                                            non_finite)
+                                            non_finite, limit)
                     return StaticResult(state, lam, records, stats, False, _failure_message(failure),
                                         time.perf_counter() - t0, cutbacks, failure)
                 continue
@@ -206,6 +332,7 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
                 if shift is not None:
                     increment = shift if increment is None else shift + increment
                 prev_increment, prev_dlam, use_predictor = increment, trial - lam, True
+            previous = (state, lam)
             state, lam = new_state, trial
             rec = StepRecord(len(records) + 1, lam, out.iterations, out.residuals, time.perf_counter() - t0)
             records.append(rec)
@@ -221,17 +348,25 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
 
 def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, max_steps: int = 500,
                settings: NewtonSettings | None = None, min_increment_ratio: float = 1e-3,
-               max_increment_ratio: float = 4.0, desired_iterations: int = 5,
+               max_increment_ratio: float = 25.0, desired_iterations: int = 5,
                max_load_increment: float | None = None,
                on_step: Callable | None = None, state=None) -> StaticResult:
-    """Crisfield's cylindrical arc-length method: ||Delta q|| = Delta l in each step.
+    """Crisfield's cylindrical arc-length method: ||Delta q / scale|| = Delta l in each step.
 
     The first step's arc length follows from a load increment ``initial_increment``. Each iteration solves
     K dq_r = -r and K dq_f = f_ext and picks the load correction from the quadratic constraint, taking the
     root closest to the previous direction (this follows snap-through and snap-back). The step length adapts
-    to ``desired_iterations``; ``max_load_increment`` caps the load-factor change of a step (a dense record
-    of the path). The run ends when lam reaches ``lam_max``: the last step is then solved under load
-    control at exactly lam_max.
+    to ``desired_iterations``, between ``min_increment_ratio`` (below it the run stops with a report) and
+    ``max_increment_ratio`` times the first arc; ``max_load_increment`` caps the load-factor change of a step
+    (a dense record of the path). The run ends when lam reaches ``lam_max`` (the last step is then solved
+    under load control at exactly lam_max) or after ``max_steps`` steps (``ARC_LENGTH_OPTIONS``, all
+    settable from a scene file).
+
+    The arc is measured in units of the model size (translations) and radians (``model.dof_scale``), and the
+    corrector stops on the tests of :func:`integrators.newton.newton_solve`: the force residual relative to
+    the model's own forces, or a correction below ``settings.increment_tol`` -- the round-off floor, which
+    on a thin shell lies above the force tolerance (tested on the factorization held before a new tangent
+    is made, as in Newton).
 
     The predictor solves on the factorization left by the last iterates of the previous step when that was
     computed within ``settings.lazy_tangent`` of the converged state (else on a fresh tangent there), and an
@@ -245,6 +380,10 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
     if not (np.isfinite(lam_max) and lam_max > 0 and np.isfinite(initial_increment) and initial_increment > 0):
         raise ValueError(f"arc-length needs lam_max > 0 and initial_increment > 0, got {lam_max!r} and "
                          f"{initial_increment!r}")
+    if max_load_increment is not None and not (np.isfinite(max_load_increment) and max_load_increment > 0):
+        raise ValueError(f"arc-length max_load_increment must be > 0, got {max_load_increment!r}")
+    check_arc_length_options(max_steps=max_steps, min_increment_ratio=min_increment_ratio,
+                             max_increment_ratio=max_increment_ratio, desired_iterations=desired_iterations)
     _check_support(model)
     state = model.initial_state() if state is None else state
     solver, stats = LinearSolver(), NewtonStats(iteration="mixed" if _mixed(model, settings) else "displacement")
@@ -270,9 +409,9 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
         return stop(0.0, [], f"non-finite values in the initial state or loads: {exc}", True)
     if not np.any(f0):
         raise ValueError("arc-length needs a nonzero external load (the external force vector is zero)")
-    dl = initial_increment * float(np.linalg.norm(dq_f))
+    dl = initial_increment * _scaled_norm(model, dq_f)    # arc lengths in units of the model size and radians
     dl0 = dl
-    prev_dir = dq_f / np.linalg.norm(dq_f)
+    prev_dir = dq_f / model.dof_scale / _scaled_norm(model, dq_f)
     prev_dlam_sign = 1.0
 
     for _ in range(max_steps):
@@ -291,8 +430,8 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
             return stop(lam, [], f"non-finite values at the last converged state: {exc}; stopped at once", True)
         except SingularMatrixError as exc:
             return stop(lam, [], f"predictor: {exc}")
-        sign = np.sign(dq_f @ prev_dir) or prev_dlam_sign
-        dlam = sign * dl / np.linalg.norm(dq_f)
+        sign = np.sign(dq_f / model.dof_scale @ prev_dir) or prev_dlam_sign
+        dlam = sign * dl / _scaled_norm(model, dq_f)
         if max_load_increment is not None and abs(dlam) > max_load_increment:
             dl *= max_load_increment / abs(dlam)
             dlam = sign * max_load_increment
@@ -301,8 +440,6 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
         trial_lam = lam + dlam
         held_lag = float("inf")
         ok, residuals, it, reason, non_finite, lazy = False, [], 0, "", False, False
-        ref = _reference_norm(model, state, max(abs(trial_lam), 1e-12))
-        tol = max(settings.rtol * ref, settings.atol)
         for it in range(1, settings.max_iterations + 1):
             try:
                 # near convergence (the last correction below lazy_tangent) the residual alone first
@@ -312,16 +449,21 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                     r, K = model.residual_and_tangent(trial, trial_lam)
                     stats.tangent_updates += 1
                 stats.residual_evaluations += 1
+                f = model.external_force(trial)
             except FloatingPointError as exc:
                 reason, non_finite = f"non-finite values at iteration {it}: {exc}", True
                 break
-            norm = float(np.linalg.norm(r))
+            norm = work_norm(r, model.dof_scale)
             residuals.append(norm)
             if not np.isfinite(norm):
                 reason, non_finite = f"non-finite residual at iteration {it}", True
                 break
-            if norm <= tol and it > 1:
+            if norm <= _arc_tolerance(settings, r, f, trial_lam, lam, model.dof_scale) and it > 1:
                 ok = True
+                break
+            if K is None and _at_round_off_floor(model, solver, r, f, Dq, dl, settings):
+                ok = True
+                residuals.append(float("nan"))   # its correction, on the factorization held, is round-off
                 break
             try:
                 if K is None:
@@ -331,28 +473,21 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                 solver.factorize(K)
                 stats.factorizations += 1
                 held_lag = 0.0
-                a = solver.solve(-r)
-                b = solver.solve(model.external_force(trial))
+                dq, x = _arc_correction(solver, r, f, Dq, dl, model.dof_scale)
             except (SingularMatrixError, FloatingPointError) as exc:
                 reason = str(exc)
                 held_lag = float("inf")
                 break
-            # ||Dq + a + x b||^2 = dl^2
-            u = Dq + a
-            c2, c1, c0 = b @ b, 2 * u @ b, u @ u - dl * dl
-            disc = c1 * c1 - 4 * c2 * c0
-            if disc < 0:  # no intersection: take the closest point
-                x = -c1 / (2 * c2)
-            else:
-                roots = [(-c1 + s * np.sqrt(disc)) / (2 * c2) for s in (1.0, -1.0)]
-                x = max(roots, key=lambda z: (Dq @ (u + z * b)))
-            dq = a + x * b
             trial = model.update(trial, dq)
             Dq = Dq + dq
             trial_lam += x
             stats.iterations += 1
-            size = float(np.max(np.abs(dq / model.dof_scale)))
+            size = _scaled_size(model, dq)
             held_lag += size
+            if size <= settings.increment_tol and it > 1:
+                ok = True                                  # the round-off floor reached (as in Newton)
+                residuals.append(float("nan"))
+                break
             lazy = size <= settings.lazy_tangent
         else:
             reason = f"no convergence in {settings.max_iterations} iterations"
@@ -366,11 +501,13 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
             continue
         if trial_lam >= lam_max:
             # finish exactly at lam_max under load control from the last converged state
+            load, reference = _step_load(model, trial, lam_max)
             state_end, out = newton_solve(
                 trial, lambda q: model.residual(q, lam_max), lambda q: model.residual_and_tangent(q, lam_max),
-                model.update, _reference_norm(model, trial, lam_max), settings, solver, stats,
+                model.update, reference, settings, solver, stats,
                 fresh_tangent=not held_lag <= settings.lazy_tangent, dof_scale=model.dof_scale,
-                conjugate=model.conjugate, held_lag=held_lag)
+                conjugate=model.conjugate, held_lag=held_lag, load=load,
+                min_iterations=int(trial_lam != lam_max))
             if out.converged:
                 rec = StepRecord(len(records) + 1, lam_max, out.iterations, out.residuals, time.perf_counter() - t0)
                 records.append(rec)
@@ -385,7 +522,7 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                 return stop(lam_max, out.residuals, f"final step to lam_max: {out.reason}", out.non_finite)
             continue
         attempts = 0
-        prev_dir = Dq / np.linalg.norm(Dq)
+        prev_dir = Dq / model.dof_scale / _scaled_norm(model, Dq)
         prev_dlam_sign = np.sign(trial_lam - lam) or prev_dlam_sign
         state, lam = trial, trial_lam
         rec = StepRecord(len(records) + 1, lam, it, residuals, time.perf_counter() - t0)

@@ -48,7 +48,7 @@ def _run(tmp_path: Path, code: str, **env: str | None) -> str:
 
 
 def _index_files(directory: Path) -> list[Path]:
-    return list(directory.rglob("scatter.scatter_blocks-*.nbi"))
+    return list(directory.rglob("scatter.*scatter_blocks-*.nbi"))
 
 
 def test_cache_goes_to_the_user_cache_directory(tmp_path):

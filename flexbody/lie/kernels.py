@@ -7,6 +7,9 @@ for the conventions), written out entry by entry with the identities::
     hat(a) hat(b) = b a^T - (a.b) I,        hat(phi)^2 = phi phi^T - p^2 I
 
 Inputs may be arrays or tuples of floats. Unless stated otherwise an output must not alias an input.
+These per-vector kernels are building blocks for ``@njit`` code and check nothing (a check in them would
+sit in the element kernels' inner loops); the batched :func:`update_frames_into`, the one called from
+Python, checks its arrays.
 
 The Taylor coefficients are taken from ``so3.SERIES`` and frozen into the compiled code; numba's cache
 keys on this file only, so clear the cache (``flexbody.kernel_cache.CACHE_DIR``) after changing the series in
@@ -19,6 +22,7 @@ import math
 
 import numba
 
+from flexbody.kernel_arrays import kernel_input, kernel_output
 from flexbody.kernel_cache import CACHE
 from flexbody.lie.so3 import SERIES, SERIES_SWITCH
 
@@ -345,7 +349,18 @@ def se3_tangent_inv_into(h, out):
 
 
 @jit
-def update_frames_into(frames, dtheta, out):
-    """out[i] = frames[i] exp(dtheta[i, 0] e1 + dtheta[i, 1] e2) for every node (the 5-DoF update, batched)."""
+def _update_frames_into(frames, dtheta, out):
     for i in range(frames.shape[0]):
         update_frame_into(frames[i], dtheta[i, 0], dtheta[i, 1], out[i])
+
+
+def update_frames_into(frames, dtheta, out) -> None:
+    """out[i] = frames[i] exp(dtheta[i, 0] e1 + dtheta[i, 1] e2) for every node (the 5-DoF update, batched).
+
+    A Python entry point (not callable from ``@njit`` code): frames (n, 3, 3), dtheta (n, 2) and the
+    writeable float64 output (n, 3, 3) are checked first (:mod:`flexbody.kernel_arrays`); ``out`` may be
+    ``frames`` itself.
+    """
+    frames = kernel_input(frames, (3, 3), "frames")
+    n = len(frames)
+    _update_frames_into(frames, kernel_input(dtheta, (2,), "dtheta", rows=n), kernel_output(out, (n, 3, 3), "out"))

@@ -20,6 +20,9 @@ from flexbody.shell.shape import gauss_triangle_7, shape_derivatives, shape_func
 #: local node triples (corner, midside, corner) of the three element edges
 ELEMENT_EDGES = np.array([[0, 3, 1], [1, 4, 2], [2, 5, 0]])
 
+#: a point whose nearest node is asked for lies at most this many model sizes away from the mesh
+NEAR_LIMIT = 1e6
+
 #: a midside node may sit at most this fraction of its edge's chord away from the chord's midpoint
 MIDSIDE_TOLERANCE = 0.25
 
@@ -101,10 +104,17 @@ class Tri6Mesh:
         return self.edge_sets[name]
 
     def nearest_node(self, point) -> int:
-        """Index of the node nearest to ``point`` (3,)."""
+        """Index of the node nearest to ``point`` (3,), which must lie within ``NEAR_LIMIT`` model sizes of
+        the mesh (farther away the distances overflow or round to one value, and any node could win)."""
         p = np.asarray(point, dtype=float)
         if p.shape != (3,) or not np.all(np.isfinite(p)):
             raise MeshError(f"point must be a finite 3-vector, got {point!r}")
+        size = float(np.ptp(self.nodes, axis=0).max())
+        low, high = self.nodes.min(axis=0), self.nodes.max(axis=0)
+        outside = np.abs(p - np.clip(p, low, high)).max()          # no overflow: no squares
+        if outside > NEAR_LIMIT * size:
+            raise MeshError(f"point {p.tolist()} lies {outside / size:.3g} model sizes away from the mesh (at most "
+                            f"{NEAR_LIMIT:g}); give a point near the node you mean")
         return int(np.argmin(np.linalg.norm(self.nodes - p, axis=1)))
 
     def with_sets(self, node_sets: Mapping[str, np.ndarray] | None = None,
@@ -114,6 +124,24 @@ class Tri6Mesh:
                         {**self.edge_sets, **(edge_sets or {})}, self.allow_coincident_nodes)
 
     # -- topology ---------------------------------------------------------------------------------------
+    def connected_components(self) -> tuple[int, np.ndarray]:
+        """The separate pieces of the mesh: their number and each node's piece label (n,), 0, 1, ...
+
+        Two elements are in one piece when a chain of elements sharing nodes joins them. Pieces are
+        numbered in the order of their lowest node index.
+        """
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+
+        conn = self.elements
+        graph = coo_matrix((np.ones(conn[:, 1:].size), (np.repeat(conn[:, 0], 5), conn[:, 1:].ravel())),
+                           shape=(self.n_nodes, self.n_nodes))
+        count, labels = connected_components(graph, directed=False)
+        _, first = np.unique(labels, return_index=True)          # renumber by lowest node
+        order = np.empty(count, dtype=np.int64)
+        order[np.argsort(first)] = np.arange(count)
+        return int(count), order[labels]
+
     def boundary_edges(self) -> np.ndarray:
         """All boundary edges (k, 3) as (corner, midside, corner), oriented as in their element."""
         triples = self.elements[:, ELEMENT_EDGES].reshape(-1, 3)

@@ -15,13 +15,18 @@ def parse_csv(text: str, source: str) -> tuple[dict[str, np.ndarray], list[str]]
     Raises
     ------
     ValueError
-        Naming ``source`` and the row, for a file without a header or data, a short row or a non-number.
+        Naming ``source`` and the row, for a file without a header or data, a header naming a column twice
+        (or an empty name), a short row, a non-number or a NaN/inf cell (naming its column).
     """
     comments = [line[1:].strip() for line in text.splitlines() if line.startswith("#")]
     rows = [(k + 1, line) for k, line in enumerate(text.splitlines()) if line.strip() and not line.startswith("#")]
     if len(rows) < 2:
         raise ValueError(f"reference CSV {source!r} needs a header row and at least one data row")
     header = [h.strip() for h in rows[0][1].split(",")]
+    twice = [h for k, h in enumerate(header) if h in header[:k]]
+    if twice or "" in header:
+        problem = f"names column {twice[0]!r} twice" if twice else "has an empty column name"
+        raise ValueError(f"reference CSV {source!r} line {rows[0][0]}: the header {problem}")
     data = []
     for lineno, row in rows[1:]:
         cells = row.split(",")
@@ -29,9 +34,14 @@ def parse_csv(text: str, source: str) -> tuple[dict[str, np.ndarray], list[str]]
             raise ValueError(f"reference CSV {source!r} line {lineno}: {len(cells)} values for "
                              f"{len(header)} columns")
         try:
-            data.append([float(v) for v in cells])
+            values = [float(v) for v in cells]
         except ValueError:
             raise ValueError(f"reference CSV {source!r} line {lineno}: not all numbers: {row.strip()!r}") from None
+        bad = [k for k, v in enumerate(values) if not np.isfinite(v)]
+        if bad:
+            raise ValueError(f"reference CSV {source!r} line {lineno}, column {header[bad[0]]!r}: "
+                             f"{cells[bad[0]].strip()!r} is not a finite number")
+        data.append(values)
     array = np.array(data)
     return {h: array[:, k] for k, h in enumerate(header)}, comments
 

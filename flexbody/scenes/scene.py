@@ -17,6 +17,7 @@ from typing import Callable, ClassVar
 import numpy as np
 
 from flexbody.assembly import Model
+from flexbody.frames import unit_vector
 from integrators.newton import NewtonSettings
 from integrators.static import StaticResult, arc_length, load_control
 
@@ -24,6 +25,9 @@ from integrators.static import StaticResult, arc_length, load_control
 @dataclass(frozen=True)
 class Output:
     """A tracked scalar: the displacement of one node along a fixed direction, times ``scale``.
+
+    The direction is normalised (any finite nonzero vector, huge components included); a node index is
+    checked against the mesh when the :class:`Scene` is made.
 
     Example: Output("W_A", node=12, direction=(0, 0, 1)) is the z-displacement of node 12.
     """
@@ -33,9 +37,27 @@ class Output:
     direction: tuple[float, float, float]
     scale: float = 1.0
 
+    def __post_init__(self) -> None:
+        if isinstance(self.node, (bool, np.bool_)) or not isinstance(self.node, (int, np.integer)):
+            raise ValueError(f"output {self.name!r} node must be a node index, got {self.node!r}")
+        object.__setattr__(self, "node", int(self.node))
+        unit = unit_vector(self.direction, f"output {self.name!r} direction")
+        object.__setattr__(self, "direction", tuple(float(v) for v in unit))
+        _check_scale(self)
+
+    def node_indices(self) -> tuple[int, ...]:
+        """The nodes this output reads (checked against the mesh when the scene is made)."""
+        return (self.node,)
+
     def value(self, model: Model, state) -> float:
         u = state.x[self.node] - model.body.mesh.nodes[self.node]
         return self.scale * float(u @ np.asarray(self.direction, float))
+
+
+def _check_scale(output) -> None:
+    scale = output.scale
+    if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not np.isfinite(scale):
+        raise ValueError(f"output {output.name!r} scale must be a finite number, got {scale!r}")
 
 
 @dataclass(frozen=True)
@@ -52,10 +74,24 @@ class RadialDisplacement:
     axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
     scale: float = 1.0
 
+    def __post_init__(self) -> None:
+        nodes = np.atleast_1d(np.asarray(self.nodes))
+        if nodes.size == 0 or nodes.ndim != 1 or not np.issubdtype(nodes.dtype, np.integer):
+            raise ValueError(f"output {self.name!r} nodes must be a non-empty list of node indices, "
+                             f"got {self.nodes!r}")
+        object.__setattr__(self, "nodes", tuple(int(i) for i in nodes))
+        unit_vector(self.axis, f"output {self.name!r} axis")
+        c = np.asarray(self.center, dtype=float)
+        if c.shape != (3,) or not np.all(np.isfinite(c)):
+            raise ValueError(f"output {self.name!r} center must be a finite 3-vector, got {self.center!r}")
+        _check_scale(self)
+
+    def node_indices(self) -> tuple[int, ...]:
+        """The nodes this output reads (checked against the mesh when the scene is made)."""
+        return self.nodes
+
     def _radius(self, x: np.ndarray) -> np.ndarray:
-        n = np.asarray(self.axis, float)
-        n = n / np.abs(n).max()                    # no overflow in the norm of a huge axis vector
-        n = n / np.linalg.norm(n)
+        n = unit_vector(self.axis, f"output {self.name!r} axis")
         r = x - np.asarray(self.center, float)
         return np.linalg.norm(r - np.outer(r @ n, n), axis=1)
 
@@ -101,13 +137,17 @@ class Reference:
 
 @dataclass(frozen=True)
 class StaticAnalysis:
-    """method: "load_control" (steps to the listed load factors) or "arc_length"."""
+    """method: "load_control" (steps to the listed load factors) or "arc_length"; ``arc_options``: the
+    arc-length step-length controls (``integrators.static.ARC_LENGTH_OPTIONS``: ``max_steps``,
+    ``min_increment_ratio``, ``max_increment_ratio``, ``desired_iterations``) that differ from the defaults
+    of :func:`integrators.static.arc_length`."""
 
     method: str = "load_control"
     load_factors: tuple[float, ...] = tuple(np.linspace(0.05, 1.0, 20))
     arc_increment: float = 0.05
     max_load_increment: float | None = None
     newton: NewtonSettings = field(default_factory=NewtonSettings)
+    arc_options: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True, eq=False)
@@ -145,6 +185,8 @@ class DynamicAnalysis:
     """
 
     SINGLE_THREAD_ELEMENTS: ClassVar[int] = 2000
+    #: the most time steps a run may ask for (1e12 steps hung in the list of output times)
+    MAX_TIME_STEPS: ClassVar[int] = 10_000_000
 
     time_step: float
     end_time: float
@@ -168,6 +210,9 @@ class DynamicAnalysis:
                 raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
         if self.time_step > self.end_time:
             raise ValueError(f"time_step must not exceed end_time, got {self.time_step!r} > {self.end_time!r}")
+        if self.end_time / self.time_step > self.MAX_TIME_STEPS:
+            raise ValueError(f"end_time / time_step asks for {self.end_time / self.time_step:.3g} time steps, at most "
+                             f"{self.MAX_TIME_STEPS} (time_step {self.time_step!r}, end_time {self.end_time!r})")
         if isinstance(self.rho_inf, bool) or not isinstance(self.rho_inf, (int, float)) or not 0 <= self.rho_inf <= 1:
             raise ValueError(f"rho_inf must lie in [0, 1], got {self.rho_inf!r}")
         if self.policy not in ("modified", "full"):
@@ -212,10 +257,21 @@ class Scene:
     reference: Reference | None = None
     parameters: dict = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        _check_outputs(self.outputs, self.model.body.n_nodes)
+
     @property
     def kind(self) -> str:
         """"dynamic" for a :class:`DynamicAnalysis`, else "static"."""
         return "dynamic" if isinstance(self.analysis, DynamicAnalysis) else "static"
+
+
+def _check_outputs(outputs: list, n_nodes: int) -> None:
+    """Every output's nodes exist: a bad index is named when the scene is made, not at the first step."""
+    for out in outputs:
+        for i in getattr(out, "node_indices", lambda: ())():
+            if not 0 <= i < n_nodes:
+                raise ValueError(f"output {out.name!r} names node {i}, but the mesh has nodes 0..{n_nodes - 1}")
 
 
 @dataclass
@@ -455,7 +511,8 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
             result = load_control(model, a.load_factors, settings=a.newton, on_step=record)
         else:
             result = arc_length(model, lam_max=max(a.load_factors), initial_increment=a.arc_increment,
-                                max_load_increment=a.max_load_increment, settings=a.newton, on_step=record)
+                                max_load_increment=a.max_load_increment, settings=a.newton, on_step=record,
+                                **a.arc_options)
     wall = time.perf_counter() - t0
     errors = compare_with_reference(history, scene.reference) if scene.reference else []
     return RunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, history, errors, wall,

@@ -5,6 +5,7 @@ report a bad scene as one :class:`SceneError` line."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+import functools
 import importlib.util
 import inspect
 import os
@@ -12,7 +13,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from flexbody.scenes.scene import Scene
-from flexbody.scenes.toml_scene import SceneError, density_parameters, load_toml_scene
+from flexbody.scenes.toml_scene import MAX_STEPS, SceneError, density_parameters, load_toml_scene
 
 __all__ = ["SceneError", "SceneSource", "open_scene", "scene_kind"]
 
@@ -44,13 +45,18 @@ class SceneSource:
             if unknown:
                 raise SceneError(f"unknown parameter(s) {unknown} for scene {self.name!r}; "
                                  f"documented keys: {', '.join(self.keys)}")
+        if self.kind != "toml" and "steps" in overrides:   # a TOML file checks its analysis.steps itself
+            steps = overrides["steps"]
+            if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= MAX_STEPS:
+                raise SceneError(f"scene {self.name!r}: steps must be an integer in 1..{MAX_STEPS}, got {steps!r}")
         try:
             return self.builder(overrides)
         except SceneError:
             raise
         except (ValueError, TypeError, KeyError) as exc:
             msg = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
-            raise SceneError(f"cannot build scene {self.name!r}: {str(msg).splitlines()[0] if msg else exc!r}") from None
+            text = str(msg).splitlines()[0] if msg else repr(exc)      # (a `!r` here quoted every message)
+            raise SceneError(f"cannot build scene {self.name!r}: {text}") from None
 
 
 def scene_kind(name: str) -> str:
@@ -88,7 +94,29 @@ def _python_builder(path: str) -> Callable:
         raise SceneError(f"cannot load scene file {path!r}: {type(exc).__name__}: {exc}") from None
     if not callable(getattr(module, "build", None)):
         raise SceneError(f"scene file {path!r} must define a function build(**parameters) -> Scene")
-    return module.build
+    return _checked_build(path, module.build)
+
+
+def _checked_build(path: str, build: Callable) -> Callable:
+    """A user's ``build`` whose exceptions and wrong return values become one SceneError line."""
+
+    @functools.wraps(build)
+    def checked(**parameters) -> Scene:
+        try:
+            scene = build(**parameters)
+        except SceneError:
+            raise
+        except Exception as exc:  # a user's code: report, do not trace back into it
+            text = str(exc).splitlines()[0] if str(exc) else ""
+            raise SceneError(f"cannot build scene {path!r}: build() raised {type(exc).__name__}"
+                             + (f": {text}" if text else "")) from None
+        if not isinstance(scene, Scene):
+            shown = repr(scene)
+            shown = shown if len(shown) <= 60 else shown[:57] + "..."
+            raise SceneError(f"cannot build scene {path!r}: build() returned {shown}, expected a Scene")
+        return scene
+
+    return checked
 
 
 def open_scene(name: str) -> SceneSource:

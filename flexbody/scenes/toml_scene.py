@@ -53,6 +53,9 @@ class SceneError(ValueError):
 
 _REQUIRED = object()
 
+#: the most load steps a scene may ask for (a path needs far fewer; 1e10 steps exhausted the memory)
+MAX_STEPS = 100_000
+
 #: mesh generators by name, and which of their parameters set the mesh density (used by ``flexbody bench``)
 GENERATOR_NAMES = ("strip", "slit_annulus", "annulus", "cylinder", "spherical_cap", "regular_polygon")
 DENSITY_PARAMETERS = {
@@ -65,7 +68,7 @@ _SECTIONS = ("name", "description", "mesh", "material", "element", "bc", "load",
 _SELECTORS = ("set", "nodes", "near", "plane", "ring")
 _MATERIAL_KEYS = ("young", "poisson", "thickness", "density", "shear_correction")
 _ANALYSIS_KEYS = ("method", "steps", "max_load_factor", "load_factors", "arc_increment", "max_load_increment",
-                  "newton")
+                  "max_steps", "min_increment_ratio", "max_increment_ratio", "desired_iterations", "newton")
 _DYNAMIC_KEYS = ("type", "dt", "end_time", "rho_inf", "policy", "output_every", "gravity", "load_ramp_time",
                  "initial", "hub", "integrator", "damping")
 _DAMPING_KEYS = ("alpha_mass", "beta_stiffness", "ratio", "frequencies_hz")
@@ -207,10 +210,12 @@ class _Table:
             raise self.error(name, f"must be > 0, got {value!r}")
         return float(value)
 
-    def integer(self, name: str, default: Any = _REQUIRED, *, minimum: int = 1) -> int:
+    def integer(self, name: str, default: Any = _REQUIRED, *, minimum: int = 1, maximum: int | None = None) -> int:
         value = self.raw(name, default)
         if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
             raise self.error(name, f"must be an integer >= {minimum}, got {value!r}")
+        if maximum is not None and value > maximum:
+            raise self.error(name, f"must be an integer in {minimum}..{maximum}, got {value!r}")
         return value
 
     def boolean(self, name: str, default: Any = _REQUIRED) -> bool:
@@ -234,6 +239,14 @@ class _Table:
         if not ok:
             raise self.error(name, f"must be a list of three finite numbers, got {value!r}")
         return np.array(value, dtype=float)
+
+    def direction(self, name: str, vector: np.ndarray) -> np.ndarray:
+        """The unit vector of the direction ``vector`` read from key ``name`` (a nonzero vector, any size)."""
+        from flexbody.frames import unit_vector
+        try:
+            return unit_vector(vector, "direction")
+        except ValueError:
+            raise self.error(name, f"must be a nonzero vector, got {vector.tolist()}") from None
 
     def numbers(self, name: str, default: Any = _REQUIRED) -> list[float]:
         value = self.raw(name, default)
@@ -329,10 +342,7 @@ def _select_nodes(t: _Table, mesh, *, single: bool = False) -> np.ndarray:
                          f"{', '.join(_SELECTORS)}, got {given or 'none'}")
     kind = given[0]
     if kind == "set":
-        value = t.raw("set")
-        names = [value] if isinstance(value, str) else value
-        if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
-            raise t.error("set", f"must be a set name or a list of set names, got {value!r}")
+        names = _set_names(t, "a set name or a list of set names")
         nodes = np.unique(np.concatenate([_wrap(t.where, t.key("set"), mesh.node_set, n) for n in names]))
     elif kind == "nodes":
         value = t.raw("nodes")
@@ -344,16 +354,13 @@ def _select_nodes(t: _Table, mesh, *, single: bool = False) -> np.ndarray:
             raise t.error("nodes", f"names node {bad[0]}, but the mesh has nodes 0..{mesh.n_nodes - 1}")
         nodes = np.unique(np.array(value, dtype=int))
     elif kind == "near":
-        nodes = np.array([mesh.nearest_node(t.vector("near"))])
+        nodes = np.array([_wrap(t.where, t.key("near"), mesh.nearest_node, t.vector("near"))])
     elif kind == "ring":
         ring = t.table("ring")
         radius = ring.number("radius", positive=True)
         center, axis = ring.vector("center", [0.0, 0.0, 0.0]), ring.vector("axis", [0.0, 0.0, 1.0])
         ring.done(["radius", "center", "axis"])
-        if not np.abs(axis).max() > 0:
-            raise ring.error("axis", f"must be a nonzero vector, got {axis.tolist()}")
-        n = axis / np.abs(axis).max()
-        n = n / np.linalg.norm(n)
+        n = ring.direction("axis", axis)
         r = mesh.nodes - center
         distance = np.linalg.norm(r - np.outer(r @ n, n), axis=1)
         size = float(np.ptp(mesh.nodes, axis=0).max()) or 1.0
@@ -365,10 +372,8 @@ def _select_nodes(t: _Table, mesh, *, single: bool = False) -> np.ndarray:
         plane = t.table("plane")
         point, normal = plane.vector("point"), plane.vector("normal")
         plane.done(["point", "normal"])
-        if not np.linalg.norm(normal) > 0:
-            raise plane.error("normal", f"must be a nonzero vector, got {normal.tolist()}")
         size = float(np.ptp(mesh.nodes, axis=0).max()) or 1.0
-        distance = (mesh.nodes - point) @ (normal / np.linalg.norm(normal))
+        distance = (mesh.nodes - point) @ plane.direction("normal", normal)
         nodes = np.flatnonzero(np.abs(distance) <= 1e-8 * size)
         if nodes.size == 0:
             raise SceneError(f"{t.where}: {t.key('plane')} selects no nodes (no node lies on the plane "
@@ -402,12 +407,24 @@ def _build_bcs(tables: list[_Table], mesh) -> list:
     return out
 
 
-def _edges(t: _Table, mesh) -> np.ndarray:
+def _set_names(t: _Table, what: str) -> list[str]:
+    """The names of ``set`` (one name or a list of distinct names)."""
     value = t.raw("set")
     names = [value] if isinstance(value, str) else value
     if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
-        raise t.error("set", f"must be an edge set name or a list of them, got {value!r}")
-    return np.vstack([_wrap(t.where, t.key("set"), mesh.edge_set, n) for n in names])
+        raise t.error("set", f"must be {what}, got {value!r}")
+    twice = [n for k, n in enumerate(names) if n in names[:k]]
+    if twice:
+        raise t.error("set", f"lists {twice[0]!r} twice, got {value!r}")
+    return names
+
+
+def _edges(t: _Table, mesh) -> np.ndarray:
+    """The edges of ``set``: their union, each edge once even where the sets overlap."""
+    names = _set_names(t, "an edge set name or a list of them")
+    edges = np.vstack([_wrap(t.where, t.key("set"), mesh.edge_set, n) for n in names])
+    _, first = np.unique(np.sort(edges[:, [0, 2]], axis=1), axis=0, return_index=True)
+    return edges[np.sort(first)]
 
 
 def _nodal_loads(vectors: np.ndarray, key: str) -> list:
@@ -599,6 +616,7 @@ def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None) -> Dy
 
 
 def _build_analysis(t: _Table) -> StaticAnalysis:
+    from integrators.static import ARC_LENGTH_OPTIONS, check_arc_length_options
     if t.has("type"):
         t.string("type", choices=("static", "dynamic"))
     method = t.string("method", "load_control", choices=("load_control", "arc_length"))
@@ -607,19 +625,26 @@ def _build_analysis(t: _Table) -> StaticAnalysis:
     if method == "load_control":
         if t.has("load_factors") and t.has("steps"):
             raise SceneError(f"{t.where}: give analysis.steps or analysis.load_factors, not both")
+        if t.has("load_factors") and t.has("max_load_factor"):
+            raise SceneError(f"{t.where}: give analysis.max_load_factor or analysis.load_factors, not both "
+                             "(the last load factor is the largest)")
         if t.has("load_factors"):
             lf = t.numbers("load_factors")
             if any(b <= a for a, b in zip([0.0] + lf, lf)):
                 raise t.error("load_factors", f"must be positive and increasing, got {lf}")
         else:
-            steps = t.integer("steps", 10)
+            steps = t.integer("steps", 10, maximum=MAX_STEPS)
             lf = list(np.linspace(0.0, lam_max, steps + 1)[1:])
         t.done(["type", "method", "steps", "max_load_factor", "load_factors", "newton"])
         return StaticAnalysis("load_control", tuple(lf), newton=newton)
     arc = t.number("arc_increment", 0.05, positive=True)
     cap = t.number("max_load_increment", None, positive=True)
-    t.done(["type", "method", "max_load_factor", "arc_increment", "max_load_increment", "newton"])
-    return StaticAnalysis("arc_length", (lam_max,), arc, cap, newton)
+    options = {k: t.integer(k) if k in ("max_steps", "desired_iterations") else t.number(k)
+               for k in ARC_LENGTH_OPTIONS if t.has(k)}
+    _wrap(t.where, "analysis", check_arc_length_options, **options)
+    t.done(["type", "method", "max_load_factor", "arc_increment", "max_load_increment", *ARC_LENGTH_OPTIONS,
+            "newton"])
+    return StaticAnalysis("arc_length", (lam_max,), arc, cap, newton, options)
 
 
 def _build_outputs(tables: list[_Table], mesh, dynamic: bool = False) -> list:
@@ -632,9 +657,7 @@ def _build_outputs(tables: list[_Table], mesh, dynamic: bool = False) -> list:
         kind = t.string("type", "displacement", choices=_OUTPUT_TYPES)
         if kind == "radial":
             nodes = _select_nodes(t, mesh)
-            axis = t.vector("axis", [0.0, 0.0, 1.0])
-            if not np.abs(axis).max() > 0:
-                raise t.error("axis", f"must be a nonzero vector, got {axis.tolist()}")
+            axis = t.direction("axis", t.vector("axis", [0.0, 0.0, 1.0]))
             out.append(RadialDisplacement(name, tuple(int(i) for i in nodes), tuple(t.vector("center", [0, 0, 0])),
                                           tuple(axis), t.number("scale", 1.0)))
             t.done(["name", "type", *_SELECTORS, "center", "axis", "scale"])
@@ -652,10 +675,7 @@ def _build_outputs(tables: list[_Table], mesh, dynamic: bool = False) -> list:
         if t.has("component"):
             direction = _COMPONENTS[t.string("component", choices=tuple(_COMPONENTS))]
         else:
-            d = t.vector("direction")
-            if not np.linalg.norm(d) > 0:
-                raise t.error("direction", f"must be a nonzero vector, got {d.tolist()}")
-            direction = tuple(float(v) for v in d / np.linalg.norm(d))
+            direction = tuple(float(v) for v in t.direction("direction", t.vector("direction")))
         out.append(Output(name, node, direction, t.number("scale", 1.0)))
         t.done(["name", "type", *_SELECTORS, "component", "direction", "scale"])
     return out

@@ -61,6 +61,7 @@ import numba.extending
 import numpy as np
 from numba import prange
 
+from flexbody.kernel_arrays import kernel_input as _as
 from flexbody.kernel_cache import CACHE
 from flexbody.lie import kernels as lk
 from flexbody.lie.so3 import SERIES, SERIES_SWITCH
@@ -2171,13 +2172,6 @@ def _n_chunks(m: int) -> int:
     if m < 128:
         return 1
     return max(1, min(m, 4 * numba.get_num_threads()))
-
-
-def _as(a, shape_tail, name):
-    a = np.ascontiguousarray(a, dtype=np.float64)
-    if a.shape[1:] != shape_tail:
-        raise ValueError(f"{name} must have shape (m, {', '.join(map(str, shape_tail))}), got {a.shape}")
-    return a
 
 
 def _element_arrays(x_el, frames_el, e_ref, to_cart, **more):

@@ -76,7 +76,7 @@ class ScriptedResidual:
 
 def _scripted(script, lazy):
     model, stats = ScriptedResidual(script), NewtonStats()
-    settings = NewtonSettings(rtol=1e-16, atol=1e-16, increment_tol=1e-11, lazy_tangent=lazy)
+    settings = NewtonSettings(rtol=1e-16, increment_tol=1e-11, lazy_tangent=lazy)
     state, out = newton_solve(np.zeros(1), model.residual, model.residual_and_tangent, lambda q, dq: q + dq,
                               1.0, settings, LinearSolver(), stats)
     return state, out, stats

@@ -9,7 +9,7 @@ import pytest
 
 from flexbody.scenes import builtin
 from integrators.linear import LinearSolver
-from integrators.newton import NewtonSettings, NewtonStats, newton_solve
+from integrators.newton import NewtonSettings, NewtonStats, newton_solve, work_norm
 from integrators.static import arc_length, load_control
 from tests.integrators.test_fewer_iterations import _max_displacement_difference, _run
 from tests.integrators.toy import CubicSpring
@@ -37,7 +37,7 @@ def test_thin_plate_same_equilibria_in_fewer_iterations():
     for state in (plain.state, mixed.state):       # both are equilibria: Newton from them does not move
         state = dataclasses.replace(state, stress=None)
         lam = levels[-1]
-        ref = lam * float(np.linalg.norm(model.external_force(state)))
+        ref = work_norm(lam * model.external_force(state), model.dof_scale)
         end, out = newton_solve(state, lambda q: model.residual(q, lam), lambda q: model.residual_and_tangent(q, lam),
                                 model.update, ref, dataclasses.replace(DISPLACEMENT, lazy_tangent=0.0), LinearSolver(),
                                 NewtonStats(), dof_scale=model.dof_scale)
@@ -57,7 +57,7 @@ def test_one_step_of_the_rolling_strip():
         start = model.initial_state()
         if settings.mixed:
             start = model.with_stresses(start)
-        ref = lam * float(np.linalg.norm(model.external_force(start)))
+        ref = work_norm(lam * model.external_force(start), model.dof_scale)
         state, out = newton_solve(start, lambda q: model.residual(q, lam), lambda q: model.residual_and_tangent(q, lam),
                                   model.update, ref, settings, LinearSolver(), NewtonStats(), dof_scale=model.dof_scale)
         assert out.converged, out.reason
