@@ -322,7 +322,7 @@ def explicit_limits(dyn) -> dict:
     ``estimate`` = l_min / c with l_min the smallest distance between two nodes of an element."""
     import scipy.sparse as sp
     s = dyn.model.initial_state()
-    _, K = dyn.residual_and_tangent(s, np.zeros(dyn.n_dof), 0.0)
+    _, K = dyn.residual_and_tangent(s, np.zeros(dyn.n_dof), np.zeros(dyn.n_dof), 0.0)
     K = 0.5 * (K + K.T)
     m = sp.diags(1.0 / np.sqrt(dyn.mass))
     A = (m @ K @ m).toarray()

@@ -410,13 +410,27 @@ class Model:
         du[idx] = np.einsum("nij,nj->ni", self.basis[idx], d6[idx, :3])
         new = update_state(state, du, d6[:, 3:5], self.has_basis)
         if state.stress is not None:
-            # the local nodal motion [du, dtheta] of each element (du local: R_I^T dx_I on basis nodes)
-            h = np.zeros((n, 6))
-            h[:, :3] = du
-            h[idx, :3] = np.einsum("nji,nj->ni", state.frames[idx], du[idx])
-            h[:, 3:5] = d6[:, 3:5]
-            new.stress = self.body.stresses(state, h[self.body.mesh.elements].reshape(-1, 36))
+            new.stress = self.body.stresses(state, self.element_motions(state, dq))
         return new
+
+    def element_motions(self, state: ShellState, dq: np.ndarray) -> np.ndarray:
+        """The local nodal motion [du, dtheta] (drilling 0) of each element (m, 36) for an increment (or a
+        velocity) dq on the free DoFs: du_I = R_I^T E_I dv_I on basis nodes, du_I itself elsewhere."""
+        n = self.body.n_nodes
+        d6 = np.zeros(6 * n)
+        d6[self.free] = dq
+        d6 = d6.reshape(n, 6)
+        idx = np.flatnonzero(self.has_basis)
+        d6[idx, :3] = np.einsum("nji,njk,nk->ni", state.frames[idx], self.basis[idx], d6[idx, :3])
+        d6[:, 5] = 0.0
+        return d6[self.body.mesh.elements].reshape(-1, 36)
+
+    def assemble_element_forces(self, state: ShellState, fe: np.ndarray) -> np.ndarray:
+        """Element force vectors (m, 36) in the nodal local frames -> their equations on the free DoFs (the
+        rows of :meth:`residual`)."""
+        r6 = np.zeros(6 * self.body.n_nodes)
+        np.add.at(r6, self._dof6, fe)
+        return self._rotate_rows(state, r6.reshape(-1, 6)).ravel()[self.free]
 
     @property
     def supports_mixed_iteration(self) -> bool:

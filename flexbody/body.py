@@ -208,6 +208,19 @@ class ShellBody:
                  for e in range(len(x_el))]
         return tuple(np.array([p[k] for p in parts]) for k in range(3))
 
+    def stress_forces(self, state: ShellState, stress: np.ndarray) -> np.ndarray:
+        """The element forces sum_g w_g B_g^T stress_g (m, 36) of given Gauss-point stress resultants
+        (m, 7, 8), in the nodal local frames, without a tangent (numba kernel; the reference kernel takes
+        :meth:`mixed_element_forces`). MITC6 variants."""
+        if self.kernel != "numba":
+            return self.mixed_element_forces(state, stress)[2]
+        if not self.supports_mixed_iteration:
+            raise ValueError("forces of given stresses are not available for tying='mitc7'")
+        x_el, fr_el, C, ref = self._element_arrays(state)
+        from flexbody.shell.element import internal_force_tangent_batch
+        return internal_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C, self._maps,
+                                            False, np.asarray(stress, dtype=float))[2]
+
     def _element_arrays(self, state: ShellState):
         """Nodal positions (m, 6, 3) and frames (m, 6, 3, 3) per element, the section, the reference data."""
         conn = self.mesh.elements
@@ -226,6 +239,17 @@ class ShellBody:
         """Stress resultants C (eps_g + B_g dh) (m, 7, 8) at the Gauss points: of the state (dh_el None), or
         linearized along local nodal motions dh_el (m, 36), per node [du, dtheta] -- the stress update of
         the mixed Newton iteration (MITC6 variants)."""
+        eps, deps = self._linearized_strains(state, dh_el)
+        return (eps + deps) @ self.material.section().T
+
+    def stress_rates(self, state: ShellState, hdot_el: np.ndarray) -> np.ndarray:
+        """The linearized stress increments C B_g hdot (m, 7, 8) of local nodal motions hdot_el (m, 36) alone
+        (without the stresses of the state): with nodal velocities, the Kelvin-Voigt stresses of the strain
+        rates B v (zero for a rigid velocity). MITC6 variants."""
+        return self._linearized_strains(state, hdot_el)[1] @ self.material.section().T
+
+    def _linearized_strains(self, state: ShellState, dh_el: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """Strains eps_g (m, 7, 8) of the state and their linearized increments B_g dh (m, 7, 8)."""
         if not self.supports_mixed_iteration:
             raise ValueError("linearized stresses are not available for tying='mitc7'")
         x_el, fr_el, C, ref = self._element_arrays(state)
@@ -242,7 +266,7 @@ class ShellBody:
                      for e in range(m)]
             eps = np.array([p[0] for p in pairs]).reshape(m, N_GAUSS, 8)
             deps = np.array([p[1] for p in pairs]).reshape(m, N_GAUSS, 8)
-        return (eps + deps) @ C.T
+        return eps, deps
 
     def _bubble_element_forces(self, x_el, fr_el, C, want_tangent):
         """MITC7 elements: the rotation bubble condensed element by element, warm-started."""
@@ -285,6 +309,7 @@ class ShellBody:
             return
         internal_force_tangent_batch(*args, True)
         internal_force_tangent_batch(*args, False)
+        internal_force_tangent_batch(*args, False, np.zeros((1, N_GAUSS, 8)))
         from flexbody.shell.element import linearized_strains_batch
         linearized_strains_batch(*args[:4], self._maps, np.zeros((1, 36)))
 

@@ -233,8 +233,9 @@ def _balance_lines(d: dict) -> list[str]:
     e, m = d["energy"], d["momentum"]
     lines = [f"energy           kinetic {e['kinetic']['initial']:.5g} -> {e['kinetic']['final']:.5g}, strain "
              f"{e['strain']['initial']:.5g} -> {e['strain']['final']:.5g} (max {e['strain']['max']:.5g}), "
-             f"gravity {e['gravity']['initial']:.5g} -> {e['gravity']['final']:.5g}",
-             f"energy drift     {e['total']['max_rel_drift']:.3e} (max |E - E0| / max(T + W + |Vg|)"
+             f"gravity {e['gravity']['initial']:.5g} -> {e['gravity']['final']:.5g}"
+             + (f", dissipated {e['dissipated']['final']:.5g}" if e.get("dissipated", {}).get("final") else ""),
+             f"energy drift     {e['total']['max_rel_drift']:.3e} (max |E - E0| / max(T + W + |Vg|), E = T + W + Vg + D"
              f"{'' if e['conservative'] else '; not conserved: loads or prescribed motion do work'})",
              f"momentum drift   linear {m['linear']['max_rel_drift']:.3e}, angular {m['angular']['max_rel_drift']:.3e}"
              f" ({'isolated body: both conserved' if m['isolated'] else 'not isolated: exchanged with supports, loads or gravity'})"]

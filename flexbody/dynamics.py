@@ -3,7 +3,9 @@
 ``DynamicModel`` wraps a :class:`flexbody.assembly.Model` (it does not change it) and gives the time
 integrators (``integrators.generalized_alpha``) the equations of motion on the free DoFs::
 
-    r(q, vdot, t) = M vdot + f_int(q) - lambda(t) f_ext(q) - f_g = 0
+    r(q, v, vdot, t) = M vdot + f_d(q, v) + f_int(q) - lambda(t) f_ext(q) - f_g = 0
+
+with f_d the optional Rayleigh damping force (:class:`RayleighDamping`, zero without it).
 
 (with load groups, lambda(t) f_ext is sum_k lambda_k(t) f_ext,k, see ``Model.load_groups``).
 
@@ -42,6 +44,52 @@ import scipy.sparse as sp
 from flexbody.assembly import Model
 from flexbody.body import ShellState
 from flexbody.shell.inertia import NodalInertia, nodal_inertia, with_point_masses
+
+
+@dataclass(frozen=True)
+class RayleighDamping:
+    """Rayleigh damping, mass- and stiffness-proportional: f_d(q, v) = a0 M v + a1 B(q)^T C B(q) v.
+
+    Parameters
+    ----------
+    alpha_mass : a0 (1/s), the mass-proportional part. It damps every velocity, rigid motion included (a
+        free body's spin and drift decay as exp(-a0 t)), as in every FE code: use it for supported bodies.
+    beta_stiffness : a1 (s), the stiffness-proportional part, on the material (strain-rate) stiffness:
+        Kelvin-Voigt stresses a1 C eps_dot of the strain rates eps_dot = B(q) v. A rigid velocity has no
+        strain rate, so this part never damps rigid motion (a spinning body keeps its angular momentum). The
+        full tangent K_t v would: its geometric part G(sigma) v does not vanish for a rigid rotation of a
+        pre-stressed body (tests/test_damping.py).
+
+    A mode of circular frequency omega gets the damping ratio zeta(omega) = a0 / (2 omega) + a1 omega / 2
+    (Chopra, Dynamics of Structures, 11.4; Clough & Penzien 12-4); :meth:`from_ratio` matches a ratio at two
+    frequencies.
+    """
+
+    alpha_mass: float = 0.0
+    beta_stiffness: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("alpha_mass", "beta_stiffness"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not (np.isfinite(value) and value >= 0):
+                raise ValueError(f"damping {name} must be a finite number >= 0, got {value!r}")
+
+    @classmethod
+    def from_ratio(cls, ratio: float, frequencies_hz: tuple[float, float]) -> "RayleighDamping":
+        """The damping with ratio ``ratio`` at the two frequencies f1 <= f2 (Hz), omega_i = 2 pi f_i:
+        a0 = 2 zeta omega1 omega2 / (omega1 + omega2), a1 = 2 zeta / (omega1 + omega2) (Chopra 11.4.3).
+        Between f1 and f2 the ratio is lower, outside higher; f1 = f2 gives zeta at that frequency."""
+        if isinstance(ratio, bool) or not isinstance(ratio, (int, float)) or not (np.isfinite(ratio) and ratio >= 0):
+            raise ValueError(f"damping ratio must be a finite number >= 0, got {ratio!r}")
+        f = np.asarray(frequencies_hz, dtype=float) if np.ndim(frequencies_hz) == 1 else np.array([np.nan])
+        if f.shape != (2,) or not np.all(np.isfinite(f)) or not 0 < f[0] <= f[1]:
+            raise ValueError(f"damping frequencies_hz must be two finite frequencies 0 < f1 <= f2, got {frequencies_hz!r}")
+        w1, w2 = 2.0 * np.pi * f
+        return cls(float(2.0 * ratio * w1 * w2 / (w1 + w2)), float(2.0 * ratio / (w1 + w2)))
+
+    def ratio(self, omega: float) -> float:
+        """The damping ratio of a mode of circular frequency omega (rad/s)."""
+        return self.alpha_mass / (2.0 * omega) + self.beta_stiffness * omega / 2.0
 
 
 @dataclass(frozen=True)
@@ -104,6 +152,7 @@ class DynamicModel:
     point_masses : tip masses (:class:`flexbody.shell.inertia.PointMass`) added to the shell's lumped nodal
         inertia (``inertia``): they take part in everything the mass does (inertia forces, gravity, energies,
         momenta, the steady spin's centrifugal load)
+    damping : Rayleigh damping (:class:`RayleighDamping`), or None (undamped)
     """
 
     model: Model
@@ -111,6 +160,7 @@ class DynamicModel:
     load_factor: Callable[[float], float | np.ndarray] | None = None
     prescribed: list = field(default_factory=list)
     point_masses: list = field(default_factory=list)
+    damping: RayleighDamping | None = None
     inertia: NodalInertia = field(init=False)
 
     def __post_init__(self) -> None:
@@ -138,6 +188,11 @@ class DynamicModel:
         self._col_index = index[nodes, :3]          # (k, 3), all >= 0 (a non-basis node frees all three)
         self._rot_nodes = np.flatnonzero(np.all(index[:, 3:5] >= 0, axis=1))
         self._rot_index = index[self._rot_nodes, 3:5]
+        if self.damping is not None and not isinstance(self.damping, RayleighDamping):
+            raise ValueError(f"damping must be RayleighDamping or None, got {type(self.damping).__name__}")
+        if self.damping is not None and self.damping.beta_stiffness > 0 and not m.body.supports_mixed_iteration:
+            raise ValueError("stiffness-proportional damping (beta_stiffness > 0) needs an MITC6 element, "
+                             "not tying = 'mitc7'")
         for p in self.prescribed:
             if not isinstance(p, PrescribedMotion):
                 raise ValueError(f"prescribed motions must be PrescribedMotion, got {type(p).__name__}")
@@ -218,19 +273,92 @@ class DynamicModel:
         """g(q, t) = f_int(q) - lambda(t) f_ext(q) - f_g on the free DoFs."""
         return self.model.residual(state, self.lam(t)) - self._gravity_force
 
-    def residual(self, state: ShellState, vdot: np.ndarray, t: float) -> np.ndarray:
-        """r = M vdot + f_int - lambda f_ext - f_g (the equations of motion, exact)."""
-        return self.mass * vdot + self.internal_minus_external(state, t)
+    def residual(self, state: ShellState, v: np.ndarray, vdot: np.ndarray, t: float) -> np.ndarray:
+        """r = M vdot + f_d(q, v) + f_int - lambda f_ext - f_g (the equations of motion, exact)."""
+        return self.mass * vdot + self.damping_force(state, v) + self.internal_minus_external(state, t)
 
-    def residual_and_tangent(self, state: ShellState, vdot: np.ndarray, t: float):
-        """r and the stiffness K_t = dr/dq (columns along q o exp(eps e_k) in this layout), CSC."""
+    def residual_and_tangent(self, state: ShellState, v: np.ndarray, vdot: np.ndarray, t: float):
+        """r and the stiffness K_t = dr/dq (columns along q o exp(eps e_k) in this layout), CSC.
+
+        K_t is the tangent of f_int - lambda f_ext; the damping force's derivative in q is left out (an
+        approximation of the iteration matrix only; its velocity derivative is :meth:`damping_matrix`)."""
         r, K = self.model.residual_and_tangent(state, self.lam(t))
         K = (K @ self._column_map(state)).tocsc()
-        return self.mass * vdot + r - self._gravity_force, K
+        return self.mass * vdot + self.damping_force(state, v) + r - self._gravity_force, K
 
-    def initial_acceleration(self, state: ShellState, t: float = 0.0) -> np.ndarray:
-        """vdot_0 = -M^-1 g(q_0, t_0) (no velocity-dependent forces in these coordinates)."""
-        return -self.internal_minus_external(state, t) / self.mass
+    def initial_acceleration(self, state: ShellState, t: float = 0.0, v: np.ndarray | None = None) -> np.ndarray:
+        """vdot_0 = -M^-1 (f_d(q_0, v_0) + g(q_0, t_0)) (no gyroscopic forces in these coordinates)."""
+        f = self.internal_minus_external(state, t)
+        if v is not None:
+            f = f + self.damping_force(state, v)
+        return -f / self.mass
+
+    # -- damping -------------------------------------------------------------------------------------------
+    def material_damping_force(self, state: ShellState, v: np.ndarray) -> np.ndarray:
+        """f_v = B(q)^T C B(q) v on the free DoFs: the forces of the Kelvin-Voigt stresses C eps_dot of the
+        strain rates eps_dot = B v, with the element's own kernels (:meth:`ShellBody.stress_rates`, then
+        :meth:`ShellBody.stress_forces`). Zero for a rigid velocity."""
+        body = self.model.body
+        hdot = self.model.element_motions(state, self.model_increment(state, v))
+        fe = body.stress_forces(state, body.stress_rates(state, hdot))
+        return self.model.assemble_element_forces(state, fe)
+
+    def damping_force(self, state: ShellState, v: np.ndarray) -> np.ndarray:
+        """f_d = a0 M v + a1 f_v(q, v) (:class:`RayleighDamping`; zero without damping)."""
+        d = self.damping
+        out = np.zeros(self.n_dof)
+        if d is None:
+            return out
+        if d.alpha_mass:
+            out += d.alpha_mass * self.mass * v
+        if d.beta_stiffness:
+            out += d.beta_stiffness * self.material_damping_force(state, v)
+        return out
+
+    def damping_matrix(self, state: ShellState) -> sp.csc_matrix | None:
+        """C = df_d/dv = a0 M + a1 K_m (:meth:`material_stiffness`) for the iteration matrix, or None without
+        damping.
+
+        The exact K_m, not the current tangent K_t: a thin body's geometric stiffness G(sigma) can exceed
+        its material bending stiffness, and a1 gamma' K_t then misrepresents the damping that dominates S
+        (measured: a 1 m cantilever sagging under gravity, a1 = 1 s, failed at step 15 with K_t; with K_m it
+        completes, and a1 = 10 s takes 49 factorizations instead of 257). It costs one more tangent per
+        refresh of the iteration matrix."""
+        d = self.damping
+        if d is None or not (d.alpha_mass or d.beta_stiffness):
+            return None
+        C = sp.diags(d.alpha_mass * self.mass)
+        if d.beta_stiffness:
+            C = C + d.beta_stiffness * self.material_stiffness(state)
+        return C.tocsc()
+
+    def material_stiffness(self, state: ShellState) -> sp.csc_matrix:
+        """K_m = B^T C B in this layout (CSC): the tangent whose geometric terms carry zero stresses, without
+        loads; the velocity derivative of :meth:`material_damping_force`. MITC6 variants."""
+        zero = state.copy()
+        zero.stress = np.zeros((self.model.body.mesh.n_elements, 7, 8))
+        K = self.model.residual_and_tangent(zero, 0.0)[1]
+        return (K @ self._column_map(state)).tocsc()
+
+    def consistent_director_rates(self, state: ShellState, v: np.ndarray) -> np.ndarray:
+        """v with its rotation components replaced by the director rates that minimise the strain-rate energy
+        v^T K_m v at the given translational velocities (K_m,rr w = -K_m,rt v_t): no transverse-shear rate
+        beyond what the translations force. A rigid velocity is kept.
+
+        For a stiffness-damped start from translational velocities alone (a kick v_z without director rates):
+        its shear-strain rate puts damping moments a1 kGh gamma_dot on the rotary inertias j ~ rho h^3 / 12,
+        an initial acceleration that throws the predictor of the first step (tests/test_damping.py).
+        """
+        rot = ~self.is_translation
+        out = np.array(v, dtype=float, copy=True)
+        if not rot.any():
+            return out
+        from scipy.sparse.linalg import spsolve
+        K = self.material_stiffness(state)
+        Krr = K[rot][:, rot].tocsc()
+        out[rot] = spsolve(Krr, -(K[rot][:, ~rot] @ out[~rot]))
+        return out
+
 
     # -- reuse of an iteration matrix under large rigid rotations ------------------------------------------
     def body_rotation(self, x_ref: np.ndarray, x: np.ndarray) -> np.ndarray:

@@ -17,11 +17,20 @@ Dx gives D vdot = beta' Dx, D v = gamma' Dx with (BCA, linearisation of the step
 
     beta' = (1 - alpha_m) / (h^2 beta (1 - alpha_f)),   gamma' = gamma / (h beta)
 
-and the iteration matrix is S = M beta' + C_t gamma' + K_t T(h dq) (BCA, iteration matrix). Here M is constant and
-C_t = 0 (no velocity-dependent forces in the R^3 x SO(3) coordinates of the shell, see
-:mod:`flexbody.shell.inertia`), and T(h dq) is approximated by the identity in the iteration matrix only;
-the residual is exact (q_{n+1} is always recomputed as q_n o exp(x)). The approximation changes the
+and the iteration matrix is S = M beta' + C_t gamma' + K_t T(h dq) (BCA, iteration matrix). Here M is constant,
+the only velocity-dependent force is the optional damping (no gyroscopic forces in the R^3 x SO(3)
+coordinates of the shell, see :mod:`flexbody.shell.inertia`): C_t = ``dyn.damping_matrix(q)`` (Rayleigh:
+a0 M + a1 K_m, the velocity derivative of the damping force; its derivative in q is left out), and T(h dq)
+is approximated by the identity, both in the iteration matrix only; the residual r(q, v, vdot, t) is exact (q_{n+1} is always
+recomputed as q_n o exp(x), v_{n+1} from the integration formulas). The approximations change the
 convergence rate of the iterations, not their fixed point.
+
+Dissipated work: with damping, D(t) = int_0^t v . f_d dt is carried in the records, so that T + W + V_g + D
+is the conserved balance of an otherwise conservative body. Per step, D += h v_m . f_m with the means
+v_m = (v_n + v_{n+1}) / 2, f_m = (f_d,n + f_d,n+1) / 2 (``dyn.damping_force(q, v)``): the work of the mean
+damping force on the step's displacement h v_m, which for rho_inf = 1 (h dq_n = h v_m) is the scheme's own
+energy loss on a linear system (the trapezoidal rule's energy identity). The trapezoid of the power
+v . f_d instead overestimates it on overdamped modes, whose velocities alternate in sign.
 
 Convergence and tangent reuse: a weighted RMS norm of the correction,
 ||Dx||_w = sqrt(mean((Dx_i / (atol s_i + rtol |x_i|))^2)) with s_i the DoF scale (model size for
@@ -129,10 +138,17 @@ class DynamicStepRecord:
     linear_momentum: np.ndarray
     angular_momentum: np.ndarray
     wall_time: float
+    dissipated_energy: float = 0.0    # D(t), the work of the damping forces since the start
 
     @property
     def total_energy(self) -> float:
+        """The mechanical energy T + W + V_g (without the dissipated work)."""
         return self.kinetic_energy + self.strain_energy + self.potential_energy
+
+    @property
+    def energy_balance(self) -> float:
+        """T + W + V_g + D: conserved by an otherwise conservative body, damped or not."""
+        return self.total_energy + self.dissipated_energy
 
 
 @dataclass
@@ -148,6 +164,7 @@ class DynamicResult:
     converged: bool = True
     message: str = "completed"
     wall_time: float = 0.0
+    dissipated_energy: float = 0.0    # D at ``time``
 
 
 @dataclass
@@ -185,9 +202,10 @@ def _configuration(dyn, q_n, x: np.ndarray, t: float):
 class GeneralizedAlpha:
     """The integrator with its iteration matrix, factorization and counters (reused across steps).
 
-    ``dyn`` supplies ``mass`` (n,), ``residual(q, vdot, t)``, ``residual_and_tangent(q, vdot, t)``,
-    ``update(q, dq)``, ``dof_scale`` and, for the outputs, ``kinetic_energy``, ``strain_energy``,
-    ``gravity_potential``, ``momenta`` (see :class:`flexbody.dynamics.DynamicModel`).
+    ``dyn`` supplies ``mass`` (n,), ``residual(q, v, vdot, t)``, ``residual_and_tangent(q, v, vdot, t)``,
+    ``update(q, dq)``, ``dof_scale``, optionally ``damping_matrix(q)`` and ``damping_force(q, v)``, and,
+    for the outputs, ``kinetic_energy``, ``strain_energy``, ``gravity_potential``, ``momenta`` (see
+    :class:`flexbody.dynamics.DynamicModel`).
     """
 
     def __init__(self, dyn, h: float, settings: AlphaSettings | None = None,
@@ -201,11 +219,14 @@ class GeneralizedAlpha:
         self.stats = NewtonStats() if stats is None else stats
 
     def _refresh(self, step: _Step, t: float):
-        """New tangent at the iterate, S = M beta' + K_t (T ~ I), factorized; returns the residual."""
-        r, K = self.dyn.residual_and_tangent(step.state, step.vdot, t)
+        """New tangent at the iterate, S = M beta' + C_t gamma' + K_t (T ~ I), factorized; returns the residual."""
+        r, K = self.dyn.residual_and_tangent(step.state, step.v, step.vdot, t)
         self.stats.tangent_updates += 1
         self.stats.residual_evaluations += 1
         S = K + sp.diags(self.dyn.mass * self.params.beta_prime(self.h))
+        C = self.dyn.damping_matrix(step.state) if hasattr(self.dyn, "damping_matrix") else None
+        if C is not None:
+            S = S + self.params.gamma_prime(self.h) * C
         self.solver.factorize(S.tocsc())
         self.stats.factorizations += 1
         self._factorized_at = step.state
@@ -250,7 +271,7 @@ class GeneralizedAlpha:
                     refreshes += 1
                     any_fresh, need = True, False
                 else:
-                    r = dyn.residual(step.state, step.vdot, t)
+                    r = dyn.residual(step.state, step.v, step.vdot, t)
                     self.stats.residual_evaluations += 1
                 dx = self._solve(step.state, r)
             except (FloatingPointError, SingularMatrixError) as exc:
@@ -297,11 +318,16 @@ class GeneralizedAlpha:
 
 
 def _record(dyn, index: int, t: float, state, v: np.ndarray, iterations: int, residuals, corrections,
-            refreshes: int, substeps: int, t0: float) -> DynamicStepRecord:
+            refreshes: int, substeps: int, t0: float, dissipated: float = 0.0) -> DynamicStepRecord:
     p, L = dyn.momenta(state, v)
     return DynamicStepRecord(index, t, iterations, list(residuals), list(corrections), refreshes, substeps,
                              dyn.kinetic_energy(v), dyn.strain_energy(state), dyn.gravity_potential(state),
-                             p, L, time.perf_counter() - t0)
+                             p, L, time.perf_counter() - t0, dissipated)
+
+
+def _damping_force(dyn, state, v: np.ndarray) -> np.ndarray:
+    """f_d(q, v) (0 for a model without ``damping_force``)."""
+    return dyn.damping_force(state, v) if hasattr(dyn, "damping_force") else np.zeros_like(v)
 
 
 class _StepFailure(RuntimeError):
@@ -369,29 +395,35 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
     if hasattr(dyn, "prescribe"):
         q = dyn.prescribe(q, t_start)
     v = np.zeros(dyn.n_dof) if velocity is None else np.asarray(velocity, float).copy()
-    vdot = dyn.initial_acceleration(q, t_start)
+    vdot = dyn.initial_acceleration(q, t_start, v)
     a = vdot.copy()
     t0 = time.perf_counter()
     initial = _record(dyn, 0, t_start, q, v, 0, [], [], 0, 1, t0)
+    f_damp, dissipated = _damping_force(dyn, q, v), 0.0      # f_d and D = int v . f_d dt (module docstring)
     records: list[DynamicStepRecord] = []
     t, done, last = t_start, 0, 0  # (q, v) after `done` steps at t; `last`: the last step given to on_step
     try:
         for n in range(n_steps):
             try:
+                v_old = v
                 q, v, vdot, a, its, res, cor, ref, sub = stepper.advance(q, v, vdot, a, t)
             except _StepFailure as exc:
                 return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, False,
-                                     f"step {n + 1} from t = {t:.6g} failed: {exc}", time.perf_counter() - t0)
+                                     f"step {n + 1} from t = {t:.6g} failed: {exc}", time.perf_counter() - t0,
+                                     dissipated)
             t, done = t_start + (n + 1) * h, n + 1  # no call since advance(): an interrupt cannot fall between
+            f_new = _damping_force(dyn, q, v)
+            dissipated += 0.25 * h * float((v_old + v) @ (f_damp + f_new))
+            f_damp = f_new
             if (n + 1) % record_every == 0 or n + 1 == n_steps:
-                rec = _record(dyn, n + 1, t, q, v, its, res, cor, ref, sub, t0)
+                rec = _record(dyn, n + 1, t, q, v, its, res, cor, ref, sub, t0, dissipated)
                 records.append(rec)
                 last = n + 1
                 if on_step is not None:
                     on_step(rec, q, v)
     except KeyboardInterrupt:  # Ctrl-C / a stop request: hand the last converged step over, then stop
         if on_step is not None and done > last:
-            on_step(_record(dyn, done, t, q, v, 0, [], [], 0, 1, t0), q, v)
+            on_step(_record(dyn, done, t, q, v, 0, [], [], 0, 1, t0, dissipated), q, v)
         raise
     return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, True, "completed",
-                         time.perf_counter() - t0)
+                         time.perf_counter() - t0, dissipated)

@@ -80,7 +80,7 @@ def check_not_inputs(outputs: dict[str, str | None], inputs: dict[str, str]) -> 
 
 #: the statistics a dynamic run adds to the HDF5 file, per step
 DYNAMIC_STATS = ("refreshes", "kinetic_energy", "strain_energy", "gravity_energy", "total_energy",
-                 "linear_momentum_x", "linear_momentum_y", "linear_momentum_z",
+                 "dissipated_energy", "linear_momentum_x", "linear_momentum_y", "linear_momentum_z",
                  "angular_momentum_x", "angular_momentum_y", "angular_momentum_z")
 
 
@@ -88,7 +88,7 @@ def dynamic_stats(rec) -> dict[str, float]:
     """The :data:`DYNAMIC_STATS` of a dynamic step record (``integrators.generalized_alpha.DynamicStepRecord``)."""
     out = {"refreshes": float(rec.refreshed), "kinetic_energy": float(rec.kinetic_energy),
            "strain_energy": float(rec.strain_energy), "gravity_energy": float(rec.potential_energy),
-           "total_energy": float(rec.total_energy)}
+           "total_energy": float(rec.total_energy), "dissipated_energy": float(rec.dissipated_energy)}
     for name, vec in (("linear_momentum", rec.linear_momentum), ("angular_momentum", rec.angular_momentum)):
         for axis, value in zip("xyz", vec):
             out[f"{name}_{axis}"] = float(value)

@@ -5,8 +5,10 @@ Imported only when a scene with a :class:`flexbody.scenes.scene.DynamicAnalysis`
 reports (steps, Newton iterations, tangent updates, factorizations, wall time, outputs, errors against the
 reference) and, for a dynamic run, the energy and momentum balance:
 
-* energy: kinetic T, strain W and gravity V_g energy at the start and the end, and the largest drift of
-  the total, max_t |E(t) - E(0)| / max_t (T + W + |V_g|);
+* energy: kinetic T, strain W and gravity V_g energy at the start and the end, the work D dissipated by
+  damping (:class:`flexbody.dynamics.RayleighDamping`), and the largest drift of the balance E = T + W +
+  V_g + D, max_t |E(t) - E(0)| / max_t (T + W + |V_g|) (``total`` is T + W + V_g; a damped body's
+  ``total`` decreases by D, its balance does not);
 * momenta (about the origin): linear p and angular L at the start and the end and their largest drifts,
   max_t |p(t) - p(0)| / max(|p(0)|, sqrt(2 M max_t T)) and max_t |L(t) - L(0)| / max_t |L(t)|.
   The momenta are conserved only by an isolated body (``momentum.isolated``: no constraints, loads,
@@ -33,7 +35,7 @@ import numpy as np
 from flexbody.scenes.scene import (CompileNotice, DynamicAnalysis, Reference, Scene, kernel_threads, timings,
                                    warm_up_kernels)
 
-ENERGY_KEYS = ("kinetic", "strain", "gravity", "total")
+ENERGY_KEYS = ("kinetic", "strain", "gravity", "total", "dissipated")
 
 #: Accuracy limits of a completed dynamic run (docs/robustness.md, "Dynamic runs not to be trusted"): a run
 #: beyond one of them warns and ``flexbody run`` exits with 3. The rotation per step |omega| h (rad) of the
@@ -302,12 +304,14 @@ class DynamicRunSummary:
         return self.result.records[-1].step if self.result.records else 0
 
     def energy_summary(self) -> dict:
-        """Initial and final energies, and the largest drift of the total (module docstring)."""
+        """Initial and final energies, and the largest drift of the balance T + W + V_g + D (module docstring;
+        reported as ``total.max_drift``, ``total.max_rel_drift``)."""
         e = {k: np.asarray(self.energies[k], dtype=float) for k in ENERGY_KEYS}
         out: dict = {"conservative": self.conservative}
         out.update({k: {"initial": float(e[k][0]) + 0.0, "final": float(e[k][-1]) + 0.0} for k in ENERGY_KEYS})
         scale = float(np.max(e["kinetic"] + e["strain"] + np.abs(e["gravity"])))
-        drift = np.abs(e["total"] - e["total"][0])
+        balance = e["total"] + e["dissipated"]                  # T + W + V_g + D
+        drift = np.abs(balance - balance[0])
         out["total"]["max_drift"] = float(drift.max())
         out["total"]["max_rel_drift"] = float(drift.max() / scale) if scale > 0 else float("nan")
         out["strain"]["max"] = float(e["strain"].max())
@@ -404,13 +408,14 @@ def _output_value(out, model, dyn, state, velocity: np.ndarray) -> float:
     return out.value(model, state)
 
 
-def _state_record(dyn, step: int, t: float, state, velocity: np.ndarray, wall_time: float):
+def _state_record(dyn, step: int, t: float, state, velocity: np.ndarray, wall_time: float,
+                  dissipated: float = 0.0):
     """A step record of a state without solver statistics (the initial state; the last converged state of a
     run that stopped between two output steps): 0 iterations, energies and momenta evaluated here."""
     from integrators.generalized_alpha import DynamicStepRecord
     p, L = dyn.momenta(state, velocity)
     return DynamicStepRecord(step, t, 0, [], [], 0, 1, dyn.kinetic_energy(velocity), dyn.strain_energy(state),
-                             dyn.gravity_potential(state), p, L, wall_time)
+                             dyn.gravity_potential(state), p, L, wall_time, dissipated)
 
 
 def _steps_taken(result, a: DynamicAnalysis) -> int:
@@ -435,7 +440,7 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
 
     model, a = scene.model, scene.analysis
     dyn = DynamicModel(model, gravity=a.gravity, load_factor=a.load_factor, prescribed=list(a.prescribed),
-                       point_masses=list(a.point_masses))
+                       point_masses=list(a.point_masses), damping=a.damping)
     state, v0 = initial_conditions(dyn, a)
     history: dict[str, list[float]] = {"time": [], **{o.name: [] for o in scene.outputs}}
     energies: dict[str, list] = {k: [] for k in ("time", *ENERGY_KEYS, "linear_momentum", "angular_momentum")}
@@ -451,7 +456,8 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
             history[out.name].append(_output_value(out, model, dyn, q, v))
         energies["time"].append(rec.time)
         for key, value in (("kinetic", rec.kinetic_energy), ("strain", rec.strain_energy),
-                           ("gravity", rec.potential_energy), ("total", rec.total_energy)):
+                           ("gravity", rec.potential_energy), ("total", rec.total_energy),
+                           ("dissipated", rec.dissipated_energy)):
             energies[key].append(float(value))
         energies["linear_momentum"].append(np.asarray(rec.linear_momentum, float).tolist())
         energies["angular_momentum"].append(np.asarray(rec.angular_momentum, float).tolist())
@@ -469,7 +475,7 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
                                    settings=a.alpha_settings(), on_step=record, record_every=a.output_every)
         if result.time > history["time"][-1]:  # stopped between two output steps: record where it stopped
             last = _state_record(dyn, _steps_taken(result, a), result.time, result.state, result.velocity,
-                                 time.perf_counter() - t0)
+                                 time.perf_counter() - t0, result.dissipated_energy)
             result.records.append(last)
             record(last, result.state, result.velocity)
         wall = time.perf_counter() - t0

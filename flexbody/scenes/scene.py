@@ -176,6 +176,8 @@ class DynamicAnalysis:
         the components about the directors are not DoFs and are dropped
     settings : the integrator's other settings (tolerances, iterations, cut-backs); ``rho_inf`` and
         ``policy`` above override theirs
+    damping : Rayleigh damping (:class:`flexbody.dynamics.RayleighDamping`: ``alpha_mass`` a0,
+        ``beta_stiffness`` a1, or ``RayleighDamping.from_ratio(zeta, (f1, f2))``); None: undamped
     threads : numba threads of the element kernels during the run; None: one thread for meshes of fewer
         than ``SINGLE_THREAD_ELEMENTS`` elements (thread start-up dominates there: measured on a shared
         2-core machine, 100 steps of the 64-element membrane take 0.34 s on one thread and 2.1 s on two,
@@ -204,6 +206,7 @@ class DynamicAnalysis:
     settings: object | None = None
     threads: int | None = None
     point_masses: tuple = ()
+    damping: object | None = None
 
     def __post_init__(self) -> None:
         for name in ("time_step", "end_time"):
@@ -227,6 +230,9 @@ class DynamicAnalysis:
         g = np.asarray(self.gravity, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ValueError(f"gravity must be a finite 3-vector, got {self.gravity!r}")
+        from flexbody.dynamics import RayleighDamping
+        if self.damping is not None and not isinstance(self.damping, RayleighDamping):
+            raise ValueError(f"damping must be a RayleighDamping or None, got {type(self.damping).__name__}")
 
     @property
     def n_steps(self) -> int:

@@ -20,6 +20,8 @@ In short (every table but ``[mesh]``, ``[material]`` and one ``[[output]]`` is o
     [analysis.hub]         a node selection (or radius, or polygon), angular_velocity, ramp_time, center:
                            a hub spun up (dynamic)
     [analysis.integrator]  rtol, atol, max_iterations, refresh_ratio, max_cutbacks, ... (dynamic)
+    [analysis.damping]     alpha_mass (1/s) and/or beta_stiffness (s), or ratio + frequencies_hz = [f1, f2]:
+                           Rayleigh damping (dynamic)
     [[output]]             name, a node selection of one node, component or direction, scale; or
                            type = "radial" (mean radial displacement of nodes) | "angular_velocity"
     [reference]            file = "ref.csv", load_factor (or time) = column, columns = {output = column}
@@ -76,7 +78,8 @@ _MATERIAL_KEYS = ("young", "poisson", "thickness", "density", "shear_correction"
 _ANALYSIS_KEYS = ("method", "steps", "max_load_factor", "load_factors", "arc_increment", "max_load_increment",
                   "max_steps", "min_increment_ratio", "max_increment_ratio", "desired_iterations", "newton")
 _DYNAMIC_KEYS = ("type", "dt", "end_time", "rho_inf", "policy", "output_every", "gravity", "load_ramp_time",
-                 "initial", "hub", "integrator")
+                 "initial", "hub", "integrator", "damping")
+_DAMPING_KEYS = ("alpha_mass", "beta_stiffness", "ratio", "frequencies_hz")
 _OUTPUT_TYPES = ("displacement", "radial", "angular_velocity")
 _ELEMENT_KEYS = ("tying", "kernel")
 _COMPONENTS = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
@@ -125,7 +128,8 @@ def _section_keys(doc: dict) -> dict[str, str]:
     """Bare keys that may be set although the document does not write them: key -> dotted key."""
     keys = {k: f"material.{k}" for k in _MATERIAL_KEYS}
     keys.update({k: f"analysis.{k}" for k in _ANALYSIS_KEYS if k != "newton"})
-    keys.update({k: f"analysis.{k}" for k in _DYNAMIC_KEYS if k not in ("type", "initial", "hub", "integrator")})
+    keys.update({k: f"analysis.{k}" for k in _DYNAMIC_KEYS if k not in ("type", "initial", "hub", "integrator",
+                                                                           "damping")})
     keys.update({k: f"element.{k}" for k in _ELEMENT_KEYS})
     generator = doc.get("mesh", {}).get("generator") if isinstance(doc.get("mesh"), dict) else None
     if generator in GENERATOR_NAMES:
@@ -516,6 +520,37 @@ def _build_integrator(t: _Table | None):
     return _wrap(t.where, "analysis.integrator", AlphaSettings, **kwargs)
 
 
+def _build_damping(t: _Table):
+    """The :class:`flexbody.dynamics.RayleighDamping` of ``[analysis.damping]``: ``alpha_mass`` (1/s) and
+    ``beta_stiffness`` (s), or ``ratio`` with ``frequencies_hz = [f1, f2]`` (the ratio at both)."""
+    from flexbody.dynamics import RayleighDamping
+    t.reject_unknown(_DAMPING_KEYS)
+    direct = [k for k in ("alpha_mass", "beta_stiffness") if t.has(k)]
+    by_ratio = [k for k in ("ratio", "frequencies_hz") if t.has(k)]
+    if direct and by_ratio:
+        raise t.error(by_ratio[0], f"cannot be combined with {t.key(direct[0])}: give alpha_mass/beta_stiffness "
+                                   "or ratio with frequencies_hz")
+    if not (direct or by_ratio):
+        raise SceneError(f"{t.where}: [{t.path}] needs alpha_mass and/or beta_stiffness, or ratio with "
+                         "frequencies_hz")
+    if direct:
+        values = {}
+        for k in direct:
+            values[k] = t.number(k)
+            if values[k] < 0:
+                raise t.error(k, f"must be >= 0, got {values[k]!r}")
+        return _wrap(t.where, t.path, RayleighDamping, **values)
+    ratio = t.number("ratio")
+    if ratio < 0:
+        raise t.error("ratio", f"must be >= 0, got {ratio!r}")
+    freqs = t.numbers("frequencies_hz")
+    if len(freqs) == 1:
+        freqs = freqs * 2
+    if len(freqs) != 2 or not 0 < freqs[0] <= freqs[1]:
+        raise t.error("frequencies_hz", f"must be one frequency or two 0 < f1 <= f2 (Hz), got {t.raw('frequencies_hz')!r}")
+    return _wrap(t.where, t.path, RayleighDamping.from_ratio, ratio, tuple(freqs))
+
+
 def _centre_of_mass(body, point_masses=()) -> np.ndarray:
     from flexbody.shell.inertia import nodal_inertia, with_point_masses
     m = with_point_masses(nodal_inertia(body), point_masses).mass
@@ -684,6 +719,8 @@ def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None, load_
         load_factor = GroupFactors((load_factor or constant, *load_functions))
     settings = _build_integrator(t.table("integrator") if t.has("integrator") else None)
     kwargs: dict[str, Any] = {"point_masses": tuple(point_masses)}
+    if t.has("damping"):
+        kwargs["damping"] = _build_damping(t.table("damping"))
     if t.has("initial"):
         it = t.table("initial")
         start = it.string("state", "reference", choices=("reference", "steady_spin"))

@@ -1728,14 +1728,14 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
                         Pe, cov, st, v16, Ps)
         _force_points(used, PF, PQ, PT, PR, PX, Ps, g, G2, phi, fz)
         _force_to_local(e, fz, fr, Ti, f)
-        if not want_tangent:
-            continue
         fv = f
         if use_stress:
             _given_stress_weights(e, used, to_cart, weights, stress, at_ptr, at_g, at_i, at_v, st, Ps)
             _force_points(used, PF, PQ, PT, PR, PX, Ps, g, G2, phi, fz)
             _force_to_local(e, fz, fr, Ti, fg)
             fv = fg
+        if not want_tangent:
+            continue
         _points_tangent(used, pt_gauss, PF, PQ, PT, PR, PX, Pd, Pda, Pco, Ps, Ch,
                         loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
                         g, core, Y, Kz, Kiso, Dl, Bl, CBl, t0, t1, t2, t3, t4, t5)
@@ -2202,8 +2202,8 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
     want_tangent : False takes the residual-only path (no tangent, no second variation); K is then None.
     stress : optional (m, 7, 8) Cartesian stress resultants at the Gauss points for the geometric terms of
         the tangent (the mixed Newton iteration, :func:`flexbody.shell.element_reference.force_tangent`);
-        the force is always that of the strains. With a stress (and want_tangent) the result is
-        (f, K, f_stress), f_stress (m, 36) the force of the given stresses.
+        the force is always that of the strains. With a stress the result is (f, K, f_stress), f_stress
+        (m, 36) the force of the given stresses (K None without want_tangent).
     """
     x_el, frames_el, e_ref, to_cart, weights = _element_arrays(x_el, frames_el, e_ref, to_cart,
                                                                weights=(weights, (N_GAUSS,)))
@@ -2213,7 +2213,7 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
         raise ValueError(f"section must be (8, 8), got {C.shape}")
     if not np.allclose(C, C.T, rtol=0.0, atol=1e-13 * np.abs(C).max()):
         raise ValueError("section stiffness must be symmetric")
-    use_stress = stress is not None and want_tangent
+    use_stress = stress is not None
     stress = _as(stress, (N_GAUSS, 8), "stress") if use_stress else np.zeros((1, N_GAUSS, 8))
     if use_stress and len(stress) != m:
         raise ValueError(f"stress must have one row per element ({m}), got {len(stress)}")
@@ -2225,7 +2225,7 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
         _batch(x_el, frames_el, e_ref, to_cart, weights, C, _section_blocks(C), *maps.kernel_args(),
                bool(want_tangent), use_stress, stress, _n_chunks(m), f, fs, K)
     if use_stress:
-        return f, K, fs
+        return f, (K if want_tangent else None), fs
     return f, (K if want_tangent else None)
 
 

@@ -41,16 +41,16 @@ class Oscillator:
         self.dof_scale = 1.0
         self.n_dof = len(self.omegas)
 
-    def residual(self, q, vdot, t):
+    def residual(self, q, v, vdot, t):
         return self.mass * vdot + self.omegas**2 * q
 
-    def residual_and_tangent(self, q, vdot, t):
-        return self.residual(q, vdot, t), sp.diags(self.omegas**2).tocsc()
+    def residual_and_tangent(self, q, v, vdot, t):
+        return self.residual(q, v, vdot, t), sp.diags(self.omegas**2).tocsc()
 
     def update(self, q, dq):
         return q + dq
 
-    def initial_acceleration(self, q, t=0.0):
+    def initial_acceleration(self, q, t=0.0, v=None):
         return -self.omegas**2 * q / self.mass
 
     def kinetic_energy(self, v):

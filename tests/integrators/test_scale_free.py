@@ -114,17 +114,17 @@ class Duffing:
         self.k = np.array([1.0, 40.0])
         self.dof_scale = np.array([s, s])          # the model size: lengths in units of l = s
 
-    def residual(self, q, vdot, t):
+    def residual(self, q, v, vdot, t):
         return self.mass * vdot + self.k * q * (1 + (q / self.s) ** 2)
 
-    def residual_and_tangent(self, q, vdot, t):
+    def residual_and_tangent(self, q, v, vdot, t):
         import scipy.sparse as sp
-        return self.residual(q, vdot, t), sp.diags(self.k * (1 + 3 * (q / self.s) ** 2)).tocsc()
+        return self.residual(q, v, vdot, t), sp.diags(self.k * (1 + 3 * (q / self.s) ** 2)).tocsc()
 
     def update(self, q, dq):
         return q + dq
 
-    def initial_acceleration(self, q, t=0.0):
+    def initial_acceleration(self, q, t=0.0, v=None):
         return -self.k * q * (1 + (q / self.s) ** 2) / self.mass
 
     def kinetic_energy(self, v):

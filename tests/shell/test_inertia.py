@@ -161,12 +161,12 @@ def test_dynamic_tangent_against_group_finite_differences(rng):
     state = dyn.model.initial_state()
     for _ in range(3):
         state = dyn.update(state, 0.05 * rng.normal(size=dyn.n_dof))
-    vdot = rng.normal(size=dyn.n_dof)
-    r, K = dyn.residual_and_tangent(state, vdot, 0.3)
+    vdot, z = rng.normal(size=dyn.n_dof), np.zeros(dyn.n_dof)
+    r, K = dyn.residual_and_tangent(state, z, vdot, 0.3)
     K = K.toarray()
-    fd = central(lambda d: dyn.residual(dyn.update(state, d), vdot, 0.3), np.zeros(dyn.n_dof))
+    fd = central(lambda d: dyn.residual(dyn.update(state, d), z, vdot, 0.3), np.zeros(dyn.n_dof))
     assert np.abs(K - fd).max() < 1e-6 * np.abs(K).max()
-    assert np.allclose(r, dyn.residual(state, vdot, 0.3))
+    assert np.allclose(r, dyn.residual(state, z, vdot, 0.3))
 
 
 def test_translation_increments_are_global_and_exact(rng):
@@ -237,8 +237,8 @@ def test_transfer_carries_residual_and_tangent_along_rigid_motion(rng, curved):
     q2.x = q.x @ Q.T + 0.5
     q2.frames = np.einsum("ij,njk,kl->nil", Q, q.frames, D)
     z = np.zeros(dyn.n_dof)
-    r1, K1 = dyn.residual_and_tangent(q, z, 0.0)
-    r2, K2 = dyn.residual_and_tangent(q2, z, 0.0)
+    r1, K1 = dyn.residual_and_tangent(q, z, z, 0.0)
+    r2, K2 = dyn.residual_and_tangent(q2, z, z, 0.0)
     T = dyn.transfer(q, q2)
     P = np.column_stack([dyn.apply_transfer(e, T) for e in np.eye(dyn.n_dof)])
     assert np.allclose(P.T, np.column_stack([dyn.apply_transfer(e, T, transpose=True) for e in np.eye(dyn.n_dof)]))
