@@ -154,48 +154,14 @@ def test_a_steady_spin_start_needs_the_hub_at_that_rate(tmp_path):
         load_toml_scene(bad)
 
 
-SAIL = """
-name = "sail_10m"
-[mesh]
-generator = "regular_polygon"
-n_sides = 6
-radius = 5.0
-n_rings = 4
-[material]
-young = 3e9
-poisson = 0.3
-thickness = 1e-4
-density = 1420.0
-[analysis]
-type = "dynamic"
-dt = 0.3
-end_time = 3.0
-[analysis.initial]
-state = "steady_spin"
-angular_velocity = [0.0, 0.0, 0.20943951023931953]
-center = [0.0, 0.0, 0.0]
-[analysis.hub]
-polygon = { sides = 6, circumradius = 1.250000001 }
-angular_velocity = [0.0, 0.0, 0.20943951023931953]
-[[load]]
-type = "nodal"
-set = "boundary"
-force = [0.0, 0.0, 4.1666666666666665e-05]
-time_function = { type = "pulse", start = 0.0, duration = 6.0, shape = "sin2" }
-[[output]]
-name = "w_corner"
-near = [5.0, 0.0, 0.0]
-component = "z"
-"""
+SAIL = Path(__file__).resolve().parents[1] / "examples" / "solar_sail_10m.toml"
 
 
-def test_the_10m_sail_under_a_rim_pulse_runs_at_default_settings(tmp_path):
+def test_the_10m_sail_under_a_rim_pulse_runs_at_default_settings():
     """The sail of the spinning-membranes issue (h/L = 1e-5, 2 rpm, 2 mN on the rim in a sin^2 pulse), started on
     its steady spin: the default (modified) iteration used to fail at step 6; a step that fails on kept matrices
     is now retried with Newton's method."""
-    path = tmp_path / "sail.toml"
-    path.write_text(SAIL)
-    summary = run_scene(load_toml_scene(path))
+    summary = run_scene(load_toml_scene(SAIL))
     assert summary.result.converged, summary.result.message
     w = np.asarray(summary.history["w_corner"])
     assert w[-1] > 0 and np.all(np.isfinite(w))          # pushed out of plane along the pulse
