@@ -16,19 +16,10 @@ import pytest
 
 from flexbody.cli import main
 from flexbody.outputs.hdf5 import read_hdf5
-from tests.outputs.common import mount_small_disk, unmount
 from tests.test_cli import REPO, read_rrd, run_cli
 
 #: a small dynamic scene that runs long enough to be stopped (2 elements, 1e6 steps)
 ENDLESS = ["spinning_plate", "--set", "nx=1", "--set", "ny=1", "--set", "dt=1e-3", "--set", "end_time=1000"]
-
-
-@pytest.fixture
-def small_disk(tmp_path):
-    path = tmp_path / "disk"
-    mount_small_disk(path)
-    yield path
-    unmount(path)
 
 
 def start_cli(args: list[str], cwd: Path) -> subprocess.Popen:

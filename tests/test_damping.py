@@ -2,7 +2,6 @@
 balance T + W + D = E0, and a spinning free plate (the stiffness part does not damp rigid motion, the mass part
 does)."""
 
-import numba
 import numpy as np
 import pytest
 import scipy.linalg
@@ -17,13 +16,7 @@ from flexbody.spinning import steady_spin
 from integrators.generalized_alpha import AlphaSettings, generalized_alpha
 
 
-@pytest.fixture(autouse=True, scope="module")
-def one_numba_thread():
-    """Models of 8 to 16 elements: the kernels run on one thread (thread start-up dominates)."""
-    n = numba.get_num_threads()
-    numba.set_num_threads(1)
-    yield
-    numba.set_num_threads(n)
+pytestmark = pytest.mark.usefixtures("one_numba_thread")
 
 
 def spinning_annulus(damping: RayleighDamping | None, omega: float = 20.0):

@@ -5,7 +5,6 @@ Measured numbers (quoted in the assertions' comments) are from the runs these te
 
 import math
 
-import numba
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -21,14 +20,7 @@ from flexbody.shell.material import ShellMaterial
 from integrators.generalized_alpha import AlphaParameters, AlphaSettings, generalized_alpha
 
 
-@pytest.fixture(autouse=True, scope="module")
-def one_numba_thread():
-    """These models have 4 to 32 elements: thread start-up dominates the element kernel (20 ms against
-    0.3 ms per call on a loaded 2-core machine), so the kernels run on one thread here."""
-    n = numba.get_num_threads()
-    numba.set_num_threads(1)
-    yield
-    numba.set_num_threads(n)
+pytestmark = pytest.mark.usefixtures("one_numba_thread")
 
 
 # -- the scheme on a linear oscillator ----------------------------------------------------------------------

@@ -2,7 +2,6 @@
 file, an interrupted step write, load factors beyond rerun's timeline."""
 
 import os
-from pathlib import Path
 import subprocess
 import sys
 import textwrap
@@ -15,15 +14,7 @@ import pytest
 
 from flexbody.outputs.files import DiskFullError, OutputLockedError
 from flexbody.outputs.hdf5 import Hdf5Writer, read_hdf5
-from tests.outputs.common import REPO, mount_small_disk, run_python, square_mesh, unmount
-
-
-@pytest.fixture
-def small_disk(tmp_path):
-    path = tmp_path / "disk"
-    mount_small_disk(path)
-    yield path
-    unmount(path)
+from tests.outputs.common import REPO, run_python, square_mesh
 
 
 def state(mesh, k):

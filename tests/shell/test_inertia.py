@@ -1,6 +1,5 @@
 """Shell inertia: lumped masses, nodal inertia forces and their tangents (finite differences on the group)."""
 
-import numba
 import numpy as np
 import pytest
 
@@ -15,13 +14,7 @@ from flexbody.shell import inertia
 from flexbody.shell.material import ShellMaterial
 
 
-@pytest.fixture(autouse=True, scope="module")
-def one_numba_thread():
-    """Small models: numba thread start-up would dominate the element kernel (see docs/dynamics.md)."""
-    n = numba.get_num_threads()
-    numba.set_num_threads(1)
-    yield
-    numba.set_num_threads(n)
+pytestmark = pytest.mark.usefixtures("one_numba_thread")
 
 
 def plate_body(nx=2, ny=1, length=1.0, width=0.5, E=1e6, h=0.01, rho=1000.0):
