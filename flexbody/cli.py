@@ -4,6 +4,8 @@
     flexbody run [SCENE] [--set KEY=VALUE ...] [--json FILE] [--h5 FILE.h5] [--rerun FILE.rrd] [--quiet]
     flexbody bench [SCENE ...] [--refine KEY=V1,V2,...] [--set KEY=VALUE ...] [--out DIR] [--quiet]
     flexbody compare SCENE --with exudyn [--set KEY=VALUE ...] [--json FILE] [--quiet]
+    flexbody sweep SCENE --grid KEY=V1,V2,... [--grid ...] [--zip] [--workers N | --scheduler ADDRESS]
+        [--set KEY=VALUE ...] [--out DIR] [--json FILE] [--h5]         (docs/sweeps.md)
 
 SCENE is a built-in scene name (``flexbody list``) or a path to a ``.toml`` or ``.py`` scene file
 (docs/scenes.md). Bad input ends with one line on stderr naming the offending key or value (exit code 1);
@@ -463,6 +465,9 @@ def cmd_bench(args) -> int:
     sources = [_open(name) for name in names]
     plans = [_bench_plan(source, common, refine) for source in sources]  # a bad scene or key stops it now
     _prepare_out_dir(args.out)
+    if args.workers is not None or args.scheduler:
+        _check_workers(args)
+        return _bench_on_cluster(args, sources, plans, common)
     runs, failed = [], 0
     for source, meshes in zip(sources, plans):
         if meshes == [{}]:
@@ -487,6 +492,162 @@ def cmd_bench(args) -> int:
     return 0 if failed == 0 else 2
 
 
+def _bench_on_cluster(args, sources, plans, common: dict) -> int:
+    """``flexbody bench --workers N | --scheduler ADDRESS``: the same runs as the serial bench, as the tasks
+    of a sweep (:mod:`flexbody.sweep`, :mod:`flexbody.cluster`); the same report and exit code."""
+    from flexbody.outputs.report import BenchRun, mesh_label, write_report
+    from flexbody.sweep import make_tasks
+    tasks, labels = [], []
+    for source, meshes in zip(sources, plans):
+        density = list(meshes[0]) or list(source.density)
+        for mesh in meshes:
+            task = make_tasks(source.name, [mesh], common)[0]
+            tasks.append(task)
+            labels.append((source.name, mesh_label({**source.density, **task.parameters}, density)))
+    for i, task in enumerate(tasks):   # one numbering across the scenes
+        tasks[i] = type(task)(i, task.scene, task.parameters, task.swept, task.h5)
+
+    def status(row) -> None:
+        scene, label = labels[row.index]
+        error = (f"max rel. error {row.max_rel_error:.2e}" if math.isfinite(row.max_rel_error) else "no reference")
+        text = (f"failed: {row.message}" if not row.summary else
+                f"{row.dofs} DoFs, {row.wall_time_s:.2f} s, {error}" + ("" if row.converged else ", NOT CONVERGED"))
+        print(f"{scene:24s} {label:28s} {text}", flush=True)
+
+    rows, interrupted = _sweep_rows(tasks, args, status, warm_up=None)
+    runs = []
+    for row in sorted(rows, key=lambda r: r.index):
+        scene, label = labels[row.index]
+        if row.summary:
+            runs.append(BenchRun(row.summary.get("scene", scene), label, tasks[row.index].parameters, row.summary,
+                                 row.history, row.reference, reference_source=row.reference_source))
+        else:
+            runs.append(BenchRun(scene, label, tasks[row.index].parameters, failure=f"{row.status}: {row.message}"))
+    path = write_report(runs, args.out, " ".join(["flexbody", "bench", *args.argv]))
+    print(f"written          {path}")
+    if interrupted is not None:
+        return interrupted
+    return 0 if all(r.converged for r in runs) else 2
+
+
+# ----------------------------------------------------------------------------------------------------------
+# sweep
+# ----------------------------------------------------------------------------------------------------------
+
+def _parse_grid(items: list[str]) -> dict[str, list]:
+    """``--grid nx=2,4 --grid thickness=0.01,0.02`` -> {nx: [2, 4], thickness: [0.01, 0.02]}."""
+    grids: dict[str, list] = {}
+    for item in items:
+        key, _, values = item.partition("=")
+        if not _ or not key.strip():
+            raise CliError(f"--grid expects KEY=V1,V2,..., got {item!r}")
+        if key.strip() in grids:
+            raise CliError(f"--grid {key.strip()} is given twice")
+        grids[key.strip()] = [_parse_value(v.strip()) for v in values.split(",") if v.strip()]
+        if not grids[key.strip()]:
+            raise CliError(f"--grid {key.strip()} has no values")
+    return grids
+
+
+def _sweep_rows(tasks, args, on_row=None, warm_up=None):
+    """Run sweep tasks (serially with ``--workers 0``, else on a Dask cluster: :mod:`flexbody.cluster`), with
+    the progress ``[finished/total]`` on stderr. Returns (rows, None), or (rows, 130 / 143) if Ctrl-C or
+    SIGTERM stopped the sweep (the unfinished runs "cancelled")."""
+    from flexbody.sweep import SweepInterrupted, run_serial
+    total, finished = len(tasks), []
+    t0 = time.perf_counter()
+
+    def progress(row) -> None:
+        finished.append(row)
+        if not args.quiet:
+            params = ", ".join(f"{k}={v}" for k, v in row.parameters.items()) or "default"
+            print(f"[{len(finished)}/{total}] {params}: {row.status}"
+                  + (f" ({row.message})" if row.message and not row.converged else "")
+                  + f"  {time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
+        if on_row is not None:
+            on_row(row)
+
+    signals = _StopSignals()
+    try:
+        with signals.installed():
+            if args.workers == 0:
+                return run_serial(tasks, progress), None
+            try:
+                from flexbody.cluster import connect, run_distributed
+            except ImportError as exc:
+                raise CliError(f"running on a Dask cluster needs dask.distributed ({exc}): pip install "
+                               "'flexbody[cluster]' (or --workers 0 to run in this process)") from None
+            if not args.quiet:
+                where = f"the Dask scheduler at {args.scheduler}" if args.scheduler else \
+                    f"a local cluster of {args.workers or os.cpu_count()} worker processes"
+                print(f"running {total} runs on {where}", file=sys.stderr, flush=True)
+            try:
+                with connect(args.workers, args.scheduler) as client:
+                    return run_distributed(client, tasks, progress, warm_up), None
+            except ConnectionError as exc:
+                raise CliError(str(exc)) from None
+    except SweepInterrupted as exc:
+        code = 128 + getattr(exc.__context__, "signum", signal.SIGINT)
+        print(f"flexbody: sweep stopped after {sum(r.status != 'cancelled' for r in exc.rows)} of {total} runs; "
+              "the finished results are kept", file=sys.stderr)
+        return exc.rows, code
+    except Stopped as exc:   # stopped while the cluster started or stopped: nothing finished is lost
+        rows = list(finished)
+        from flexbody.sweep import failed_row
+        done = {r.index for r in rows}
+        rows += [failed_row(t, "cancelled", "stopped before it finished") for t in tasks if t.index not in done]
+        return rows, 128 + exc.signum
+
+
+def _check_workers(args) -> None:
+    if args.workers is not None and args.scheduler:
+        raise CliError("give --workers N or --scheduler ADDRESS, not both")
+    if args.workers is not None and args.workers < 0:
+        raise CliError(f"--workers must be >= 0 (0: in this process, no cluster), got {args.workers}")
+
+
+def cmd_sweep(args) -> int:
+    """``flexbody sweep``: run a scene over a grid of parameters as independent tasks (a local Dask cluster,
+    an existing one, or in this process with ``--workers 0``); write DIR/sweep.csv, DIR/sweep.json, the plots
+    DIR/vs_<parameter>.png and with --h5 DIR/runs/run_<index>.h5. Returns 0 if every run converged and can be
+    trusted, 2 if some failed, did not converge or were lost, 3 if all completed but some are not to be
+    trusted, 130 / 143 if stopped by Ctrl-C / SIGTERM (the finished results written)."""
+    from flexbody.sweep import grid_points, make_tasks, plot_sweep, summary_line, write_table, exit_code
+    _check_workers(args)
+    fixed = _parse_sets(args.set or [])
+    grids = _parse_grid(args.grid or [])
+    try:
+        points = grid_points(grids, paired=args.zip)
+    except ValueError as exc:
+        raise CliError(str(exc)) from None
+    source = _open(args.scene)
+    if source.keys is not None:
+        unknown = [k for k in [*fixed, *grids] if k not in source.keys]
+        if unknown:
+            raise CliError(f"unknown parameter(s) {unknown} for scene {source.name!r}; "
+                           f"documented keys: {', '.join(source.keys)}")
+    _check_outputs({"--json": args.json}, _input_files(source))
+    _prepare_out_dir(args.out)
+    h5_dir = os.path.join(args.out, "runs") if args.h5 else None
+    if h5_dir:
+        _prepare_out_dir(h5_dir)
+    tasks = make_tasks(args.scene, points, fixed, h5_dir)
+    rows, interrupted = _sweep_rows(tasks, args)
+    meta = {"command": " ".join(["flexbody", "sweep", *args.argv]), "scene": args.scene, "grid": grids,
+            "paired": bool(args.zip), "fixed": fixed,
+            "cluster": args.scheduler or ("in process" if args.workers == 0 else
+                                          f"local, {args.workers or os.cpu_count()} workers")}
+    try:
+        paths = write_table(rows, args.out, meta, args.json) + plot_sweep(rows, args.out)
+    except OSError as exc:
+        raise CliError(f"cannot write the sweep results to {args.out!r}: {exc.strerror or exc}") from None
+    for path in paths:
+        print(f"written          {path}")
+    code = exit_code(rows)
+    print(("sweep            " if code == 0 else "SWEEP NOT TRUSTED ") + summary_line(rows))
+    return interrupted if interrupted is not None else code
+
+
 # ----------------------------------------------------------------------------------------------------------
 # compare
 # ----------------------------------------------------------------------------------------------------------
@@ -507,6 +668,14 @@ def cmd_compare(args) -> int:
 # ----------------------------------------------------------------------------------------------------------
 # main
 # ----------------------------------------------------------------------------------------------------------
+
+def _cluster_arguments(parser, default: str) -> None:
+    """--workers / --scheduler of ``sweep`` and ``bench``."""
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--workers", type=int, metavar="N", help=f"a local Dask cluster of N worker processes, "
+                       f"0: in this process ({default})")
+    group.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask cluster, e.g. tcp://host:8786")
+
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="flexbody", description="List, run, bench and compare shell scenes.",
@@ -533,7 +702,22 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a parameter in every run")
     bench.add_argument("--out", default="bench", metavar="DIR", help="report directory (default ./bench)")
     bench.add_argument("--quiet", action="store_true", help="no progress output")
+    _cluster_arguments(bench, "default: serial, in this process")
     bench.set_defaults(func=cmd_bench)
+
+    sweep = sub.add_parser("sweep", help="run a scene over a grid of parameters on a Dask cluster; one table")
+    sweep.add_argument("scene", help="built-in scene or .toml/.py scene file")
+    sweep.add_argument("--grid", action="append", metavar="KEY=V1,V2,...",
+                       help="a swept parameter and its values (repeat for more; all combinations)")
+    sweep.add_argument("--zip", action="store_true", help="pair the --grid lists (equal lengths) instead of "
+                       "taking all combinations")
+    sweep.add_argument("--set", action="append", metavar="KEY=VALUE", help="a fixed parameter of every run")
+    sweep.add_argument("--out", default="sweep", metavar="DIR", help="results directory (default ./sweep)")
+    sweep.add_argument("--json", metavar="FILE", help="also write the table as JSON to FILE")
+    sweep.add_argument("--h5", action="store_true", help="write each run's HDF5 file to DIR/runs/")
+    sweep.add_argument("--quiet", action="store_true", help="no progress output")
+    _cluster_arguments(sweep, "default: a local cluster, one worker per core")
+    sweep.set_defaults(func=cmd_sweep)
 
     compare = sub.add_parser("compare", help="compare a scene with another code")
     compare.add_argument("scene", help="built-in scene or scene file")
