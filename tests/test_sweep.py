@@ -1,0 +1,174 @@
+"""Parameter sweeps on a local Dask cluster of 2 worker processes (flexbody.sweep, flexbody.cluster, the
+``flexbody sweep`` command): the same numbers as the runs made one by one, a bad value or a lost worker
+reported in the table while the other runs finish, dask never imported by a plain run."""
+
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+pytest.importorskip("distributed")
+
+from flexbody.cli import main
+from flexbody.sweep import exit_code, grid_points, make_tasks, run_task, summary_line, write_table
+
+pytestmark = pytest.mark.usefixtures("one_numba_thread")
+
+SCENE = "cantilever_end_moment"
+FIXED = {"steps": 5}          # a short path: 5 load steps of the strip rolled by an end moment
+
+
+@pytest.fixture(scope="module")
+def client():
+    """One local cluster of 2 worker processes for the module (start-up costs seconds). A task whose worker
+    dies is not retried on another worker (``allowed-failures`` 0), so the lost-worker test kills one."""
+    import dask
+    from flexbody.cluster import connect
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        with connect(workers=2) as c:
+            yield c
+
+
+def _by_index(rows):
+    return {r.index: r for r in rows}
+
+
+def test_grid_points_product_and_pairs():
+    assert grid_points({"a": [1, 2], "b": [3, 4, 5]}) == [
+        {"a": 1, "b": 3}, {"a": 1, "b": 4}, {"a": 1, "b": 5}, {"a": 2, "b": 3}, {"a": 2, "b": 4}, {"a": 2, "b": 5}]
+    assert grid_points({"a": [1, 2], "b": [3, 4]}, paired=True) == [{"a": 1, "b": 3}, {"a": 2, "b": 4}]
+    with pytest.raises(ValueError, match="one length"):
+        grid_points({"a": [1, 2], "b": [3]}, paired=True)
+    with pytest.raises(ValueError, match="at most"):
+        grid_points({k: list(range(100)) for k in "abc"})
+
+
+def test_sweep_on_cluster_equals_runs_one_by_one(client, tmp_path):
+    """A 2 x 2 sweep over mesh and thickness on 2 worker processes gives exactly the numbers of the same
+    runs made one by one in this process; the table (CSV, JSON) holds them."""
+    from flexbody.cluster import run_distributed
+    tasks = make_tasks(SCENE, grid_points({"nx": [2, 4], "thickness": [0.01, 0.02]}), FIXED)
+    rows = _by_index(run_distributed(client, tasks))
+    assert sorted(rows) == [0, 1, 2, 3]
+    outputs = set()
+    for task in tasks:
+        alone, swept = run_task(task), rows[task.index]
+        assert swept.status == alone.status == "ok"
+        assert swept.parameters == task.swept
+        assert swept.worker.startswith("tcp://")
+        for key in ("newton_iterations", "tangent_updates", "factorizations", "steps", "dofs"):
+            assert getattr(swept, key) == getattr(alone, key), key
+        assert swept.outputs == alone.outputs          # bit for bit: the same kernels on one thread
+        assert swept.max_rel_error == alone.max_rel_error
+        outputs.add(round(swept.outputs["W_tip"], 9))
+    assert len(outputs) == 4                           # the parameters did reach the runs
+    assert exit_code(rows.values()) == 0
+    write_table(list(rows.values()), str(tmp_path))
+    with open(tmp_path / "sweep.csv") as fh:
+        table = list(csv.DictReader(fh))
+    assert [int(r["index"]) for r in table] == [0, 1, 2, 3]
+    for r in table:
+        assert float(r["W_tip"]) == rows[int(r["index"])].outputs["W_tip"]
+        assert (int(r["nx"]), float(r["thickness"])) == (rows[int(r["index"])].parameters["nx"],
+                                                         rows[int(r["index"])].parameters["thickness"])
+    data = json.loads((tmp_path / "sweep.json").read_text())
+    assert data["exit_code"] == 0 and data["summary"] == "4 of 4 runs converged and trusted"
+
+
+def test_bad_value_is_reported_and_the_others_finish(client, tmp_path):
+    """One negative thickness among three: its row says "failed" and names the value; the others are
+    "ok"; the CLI (on the same cluster, --scheduler) writes the table and exits 2 with a summary line."""
+    from flexbody.cluster import run_distributed
+    tasks = make_tasks(SCENE, grid_points({"thickness": [0.01, -0.01, 0.02]}), {**FIXED, "nx": 2})
+    rows = _by_index(run_distributed(client, tasks))
+    assert [rows[i].status for i in range(3)] == ["ok", "failed", "ok"]
+    assert "thickness" in rows[1].message and "-0.01" in rows[1].message
+    assert math.isnan(rows[1].max_rel_error) and rows[1].outputs == {}
+    assert exit_code(rows.values()) == 2
+    assert summary_line(list(rows.values())) == "2 of 3 runs converged and trusted; 1 failed"
+
+    out = tmp_path / "out"
+    code = main(["sweep", SCENE, "--grid", "thickness=0.01,-0.01,0.02", "--set", "nx=2", "--set", "steps=5",
+                 "--scheduler", client.scheduler.address, "--out", str(out), "--quiet", "--h5"])
+    assert code == 2
+    with open(out / "sweep.csv") as fh:
+        table = list(csv.DictReader(fh))
+    assert [r["status"] for r in table] == ["ok", "failed", "ok"]
+    assert [float(r["W_tip"] or "nan") == rows[i].outputs.get("W_tip", -1) for i, r in enumerate(table)] == \
+        [True, False, True]
+    assert sorted(os.listdir(out / "runs")) == ["run_0000.h5", "run_0002.h5"]
+    assert (out / "vs_thickness.png").stat().st_size > 0
+
+
+def test_lost_worker_is_reported_and_the_others_finish(client, tmp_path):
+    """A run whose worker process dies (a scene file that exits the process) is a "lost" row; the other runs
+    finish on the remaining worker."""
+    scene = tmp_path / "dies.py"
+    scene.write_text(textwrap.dedent(f"""
+        import os
+        from flexbody.scenes.builtin import cantilever_end_moment
+
+        def build(die: int = 0, nx: int = 2, steps: int = 5):
+            if die:
+                os._exit(3)
+            return cantilever_end_moment(nx=nx, steps=steps)
+    """))
+    from flexbody.cluster import run_distributed
+    tasks = make_tasks(str(scene), grid_points({"die": [0, 1, 0]}))
+    rows = _by_index(run_distributed(client, tasks))
+    assert [rows[i].status for i in range(3)] == ["ok", "lost", "ok"]
+    assert "KilledWorker" in rows[1].message
+    client.wait_for_workers(2, timeout=60)             # the nanny restarts it for the next test
+
+
+def test_bench_through_the_cluster_matches_the_serial_bench(client, tmp_path):
+    """``flexbody bench --scheduler`` writes the report of the same runs as the serial bench."""
+    args = [SCENE, "--refine", "nx=2,4", "--set", "steps=5", "--quiet"]
+    assert main(["bench", *args, "--out", str(tmp_path / "serial")]) == 0
+    assert main(["bench", *args, "--out", str(tmp_path / "dask"), "--scheduler", client.scheduler.address]) == 0
+    serial, dask = (json.loads((tmp_path / d / "bench.json").read_text()) for d in ("serial", "dask"))
+    assert [r["mesh"] for r in dask] == [r["mesh"] for r in serial] == ["nx=2", "nx=4"]
+    for a, b in zip(serial, dask):
+        assert a["summary"]["outputs"] == b["summary"]["outputs"]
+        assert a["summary"]["factorizations"] == b["summary"]["factorizations"]
+        assert a["history"] == b["history"]
+
+
+def test_sweep_command_checks_its_input(tmp_path, capsys):
+    """Bad grids and options stop with one line before anything runs."""
+    cases = [(["--grid", "nx"], "--grid expects KEY=V1,V2"),
+             (["--grid", "nx="], "--grid nx has no values"),
+             (["--grid", "nx=2,4", "--grid", "ny=1", "--zip"], "one length"),
+             (["--grid", "bogus=1,2"], "unknown parameter(s) ['bogus']"),
+             (["--grid", "nx=2", "--workers", "-1"], "--workers must be >= 0")]
+    for extra, message in cases:
+        with pytest.raises(SystemExit) as exc:
+            main(["sweep", SCENE, *extra, "--out", str(tmp_path)])
+        assert message in str(exc.value)
+    with pytest.raises(SystemExit):
+        main(["sweep", SCENE, "--grid", "nx=2", "--workers", "2", "--scheduler", "tcp://localhost:1"])
+    assert "not allowed with argument" in capsys.readouterr().err
+
+
+def test_in_process_sweep_and_a_plain_run_never_import_dask(tmp_path):
+    """``flexbody run`` and ``flexbody sweep --workers 0`` do not import dask (a subprocess's sys.modules)."""
+    code = textwrap.dedent(f"""
+        import sys
+        from flexbody.cli import main
+        assert main(["run", "{SCENE}", "--set", "nx=2", "--set", "steps=2", "--quiet"]) == 0
+        assert main(["sweep", "{SCENE}", "--grid", "nx=2,3", "--set", "steps=2", "--workers", "0",
+                     "--out", {str(tmp_path)!r}, "--quiet"]) == 0
+        loaded = sorted(m for m in sys.modules if m.split(".")[0] in ("dask", "distributed"))
+        print("LOADED", loaded)
+        sys.exit(1 if loaded else 0)
+    """)
+    env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+    assert "LOADED []" in done.stdout
+    assert json.loads((tmp_path / "sweep.json").read_text())["counts"] == {"ok": 2}
