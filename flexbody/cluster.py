@@ -101,6 +101,23 @@ def run_on_worker(task: SweepTask) -> SweepRow:
 
 
 @contextmanager
+def _sigint_ignored():
+    """SIGINT ignored for the block (in the main thread): processes started in it inherit the disposition,
+    and Python installs no KeyboardInterrupt handler in a process that starts with SIGINT ignored, so Ctrl-C
+    reaches only this process, which cancels the sweep and closes the cluster (no worker tracebacks)."""
+    import signal
+    import threading
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextmanager
 def connect(workers: int | None = None, scheduler: str | None = None, quiet: bool = False):
     """A :class:`distributed.Client`: of the cluster at ``scheduler``, else of a local cluster of ``workers``
     processes (default: the number of cores), one task at a time each, whose numba pool has the cores per
@@ -117,9 +134,10 @@ def connect(workers: int | None = None, scheduler: str | None = None, quiet: boo
         return
     n = workers or os.cpu_count() or 1
     threads = threads_per_worker(os.cpu_count() or 1, n)
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                           host="127.0.0.1", silence_logs=logging.ERROR,
-                           env={"NUMBA_NUM_THREADS": str(threads)})
+    with _sigint_ignored():   # the worker processes start immune to Ctrl-C: this process stops them
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                               host="127.0.0.1", silence_logs=logging.ERROR,
+                               env={"NUMBA_NUM_THREADS": str(threads)})
     client = Client(cluster)
     try:
         yield client

@@ -172,3 +172,23 @@ def test_in_process_sweep_and_a_plain_run_never_import_dask(tmp_path):
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
     assert "LOADED []" in done.stdout
     assert json.loads((tmp_path / "sweep.json").read_text())["counts"] == {"ok": 2}
+
+
+def test_interrupt_keeps_the_finished_rows(client):
+    """Ctrl-C while the rows come in (here raised by the progress hook after the first row) cancels the rest:
+    SweepInterrupted carries the finished row and the others "cancelled", on the cluster and in series."""
+    from flexbody.cluster import run_distributed
+    from flexbody.sweep import SweepInterrupted, run_serial
+    tasks = make_tasks(SCENE, grid_points({"nx": [2, 3, 4, 5, 6, 7]}), {"steps": 2})
+
+    def interrupt(row):
+        raise KeyboardInterrupt
+
+    for run in (lambda: run_distributed(client, tasks, interrupt), lambda: run_serial(tasks, interrupt)):
+        with pytest.raises(SweepInterrupted) as exc:
+            run()
+        rows = exc.value.rows
+        assert sorted(r.index for r in rows) == list(range(6))
+        assert [r.status for r in rows].count("ok") == 1
+        assert [r.status for r in rows].count("cancelled") == 5
+        assert exit_code(rows) == 2
