@@ -4,15 +4,16 @@
 
 The sweep: the spinning plate (``spinning_plate``: free 1 x 1 m plate, 4 x 4 mesh, dt = 2 ms) over
 omega = 5, 10, 15, 20 rad/s and thickness = 10, 15, 20, 25 mm, to ``--end-time`` (16 runs). The series is
-:func:`flexbody.sweep.run_serial` in this process (kernels loaded before the clock starts); the cluster is
+:func:`flexbody.sweep.run_serial` in this process (kernels loaded before the clock starts), half of the runs
+before the cluster's and half after (so that a load of the machine that changes in time affects both alike); the cluster is
 :func:`flexbody.cluster.connect` (N worker processes, one numba thread each) and
 :func:`flexbody.cluster.run_distributed` (each worker loads the kernels once, in its warm-up plugin).
 
 Printed (Markdown): the time of the series, of the sweep on the cluster (from the submission of the first
 task to the last result, the workers' warm-up included) and of the cluster's start, the speed-up, that the
 numbers agree, and the overhead per task in two ways:
-- in the sweep: (elapsed x workers - sum of the tasks' own times) / tasks: the scheduling, the transfer
-  of the task and its row, and the workers idle at the end;
+- in the sweep: (elapsed x workers - the workers' warm-up - the tasks' own times) / tasks: the scheduling,
+  the transfer of the task and its row, and the workers idle at the end;
 - of an empty task: the time per task of 200 no-op tasks (submission to result) on the same cluster.
 The load average of the machine before and after is printed too (the machine may be shared).
 """
@@ -43,7 +44,7 @@ def main() -> None:
     run_task(tasks[0])                                     # load the kernels in this process first
 
     t0 = time.perf_counter()
-    serial = {r.index: r for r in run_serial(tasks)}
+    serial = {r.index: r for r in run_serial(tasks[::2])}      # half of the series before the cluster ...
     t_serial = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -56,6 +57,9 @@ def main() -> None:
         t0 = time.perf_counter()
         client.gather(client.map(_noop, range(200), pure=False))
         t_noop = (time.perf_counter() - t0) / 200
+    t0 = time.perf_counter()
+    serial.update({r.index: r for r in run_serial(tasks[1::2])})   # ... and half after (a load that changes)
+    t_serial += time.perf_counter() - t0
     load_after = os.getloadavg()
 
     same = all(rows[i].outputs == serial[i].outputs and rows[i].newton_iterations == serial[i].newton_iterations
@@ -64,7 +68,7 @@ def main() -> None:
     busy = sum(r.total_time_s for r in rows.values())
     cpu_serial = sum(r.cpu_time_s for r in serial.values())
     cpu_sweep = sum(r.cpu_time_s for r in rows.values())
-    overhead = (t_sweep * args.workers - busy) / len(tasks)
+    overhead = (t_sweep * args.workers - sum(warm.values()) - busy) / len(tasks)
     print(f"16-run dynamic sweep (spinning_plate, omega x thickness, end_time {args.end_time} s, "
           f"{tasks and serial[0].steps} steps each); {os.cpu_count()} cores; load average before "
           f"{load_before[0]:.2f} / {load_before[1]:.2f} (1 / 5 min), after {load_after[0]:.2f} / {load_after[1]:.2f}")
@@ -82,7 +86,7 @@ def main() -> None:
     print(f"CPU time of the 16 runs: {cpu_serial:.2f} s in series, {cpu_sweep:.2f} s on the workers; the runs got "
           f"{cpu_serial / t_serial:.2f} cores in series and {cpu_sweep / t_sweep:.2f} cores on the cluster "
           f"(CPU time / elapsed): the speed-up the machine's load allowed")
-    print(f"overhead per task: {overhead * 1e3:.0f} ms in the sweep ((elapsed x workers - task time) / tasks; "
+    print(f"overhead per task: {overhead * 1e3:.0f} ms in the sweep ((elapsed x workers - warm-up - task time) / tasks; "
           f"mean task {busy / len(tasks):.2f} s), {t_noop * 1e3:.1f} ms per empty task")
 
 

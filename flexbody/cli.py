@@ -674,7 +674,8 @@ def _cluster_arguments(parser, default: str) -> None:
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--workers", type=int, metavar="N", help=f"a local Dask cluster of N worker processes, "
                        f"0: in this process ({default})")
-    group.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask cluster, e.g. tcp://host:8786")
+    group.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask cluster: its scheduler's address (tcp://host:8786) "
+                       "or scheduler file (.json)")
 
 
 def build_parser() -> argparse.ArgumentParser:

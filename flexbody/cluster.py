@@ -119,12 +119,15 @@ def _sigint_ignored():
 
 @contextmanager
 def connect(workers: int | None = None, scheduler: str | None = None, quiet: bool = False):
-    """A :class:`distributed.Client`: of the cluster at ``scheduler``, else of a local cluster of ``workers``
+    """A :class:`distributed.Client`: of the cluster at ``scheduler`` (an address, or the JSON file a
+    ``dask scheduler --scheduler-file FILE`` wrote), else of a local cluster of ``workers``
     processes (default: the number of cores), one task at a time each, whose numba pool has the cores per
     worker (one thread when the workers outnumber the cores). Closed (and the local cluster stopped) on exit."""
     if scheduler:
+        is_file = scheduler.endswith(".json") and os.path.isfile(scheduler)
         try:
-            client = Client(scheduler, timeout="20s")
+            client = (Client(scheduler_file=scheduler, timeout="20s") if is_file
+                      else Client(scheduler, timeout="20s"))
         except (OSError, TimeoutError) as exc:
             raise ConnectionError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from None
         try:
