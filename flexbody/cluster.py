@@ -149,13 +149,26 @@ def connect(workers: int | None = None, scheduler: str | None = None, quiet: boo
         cluster.close()
 
 
+def _error_row(task: SweepTask, exc: BaseException) -> SweepRow:
+    """The row of a task that raised: "lost" if its worker died or the connection to it broke (Dask's
+    KilledWorker, a closed comm, a cancelled future), else "failed" (the run raised outside the errors
+    :func:`flexbody.sweep.run_task` reports itself)."""
+    from distributed import CancelledError
+    from distributed.comm.core import CommClosedError
+    from distributed.scheduler import KilledWorker
+    text = f"{type(exc).__name__}: {str(exc).splitlines()[0]}" if str(exc) else type(exc).__name__
+    if isinstance(exc, (KilledWorker, CommClosedError, CancelledError)):
+        return failed_row(task, "lost", f"the task did not return: {text}")
+    return failed_row(task, "failed", f"the run raised {text}")
+
+
 def run_distributed(client, tasks: list[SweepTask], on_row: Callable[[SweepRow], None] | None = None,
                     warm_up: tuple[str, dict] | None = None) -> list[SweepRow]:
     """Run ``tasks`` on the cluster of ``client``; return their rows in the order they finished.
 
     ``warm_up``: the scene and parameters whose kernels each worker loads once (:class:`KernelWarmUp`;
-    default: the first task's). A task that raises outside :func:`run_task`, or whose worker died (Dask
-    retries it on another worker before it gives up), is a "lost" row. Ctrl-C / SIGTERM cancel the tasks
+    default: the first task's). A task whose worker died (Dask retries it on other workers before it gives
+    up) is a "lost" row, one that raised outside the errors :func:`run_task` reports a "failed" row. Ctrl-C / SIGTERM cancel the tasks
     not finished and raise :class:`SweepInterrupted` with every row (the unfinished ones "cancelled").
     """
     if not tasks:
@@ -173,9 +186,7 @@ def run_distributed(client, tasks: list[SweepTask], on_row: Callable[[SweepRow],
             if future.status == "finished":
                 row = future.result()
             else:
-                exc = future.exception()
-                row = failed_row(task, "lost", f"the task did not return: {type(exc).__name__}: "
-                                 f"{str(exc).splitlines()[0] if str(exc) else ''}".rstrip(": "))
+                row = _error_row(task, future.exception())
             rows.append(row)
             if on_row is not None:
                 on_row(row)
