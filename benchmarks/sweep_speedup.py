@@ -15,7 +15,9 @@ numbers agree, and the overhead per task in two ways:
 - in the sweep: (elapsed x workers - the workers' warm-up - the tasks' own times) / tasks: the scheduling,
   the transfer of the task and its row, and the workers idle at the end;
 - of an empty task: the time per task of 200 no-op tasks (submission to result) on the same cluster.
-The load average of the machine before and after is printed too (the machine may be shared).
+The machine may be shared: its load average before and after is printed, and its capacity for parallel
+work then (a busy loop in one process against the same loop in N processes at once: N on an idle machine),
+the speed-up the load allowed.
 """
 
 from __future__ import annotations
@@ -31,6 +33,24 @@ def _noop(x):
     return x
 
 
+_BUSY = "import time; t = time.perf_counter(); sum(range(4 * 10**7)); print(time.perf_counter() - t)"
+
+
+def machine_capacity(workers: int) -> float:
+    """The speed-up the machine allows now: the time of a busy loop in one process over its time in
+    ``workers`` processes at once (2.0 on an idle 2-core machine; less when other jobs share it)."""
+    import subprocess
+    import sys
+
+    def times(n: int) -> list[float]:
+        procs = [subprocess.Popen([sys.executable, "-c", _BUSY], stdout=subprocess.PIPE, text=True)
+                 for _ in range(n)]
+        return [float(p.communicate()[0]) for p in procs]
+
+    one = times(1)[0]
+    return workers * one / max(times(workers))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--workers", type=int, default=2)
@@ -41,6 +61,7 @@ def main() -> None:
     grid = {"omega": [5.0, 10.0, 15.0, 20.0], "thickness": [0.01, 0.015, 0.02, 0.025]}
     tasks = make_tasks("spinning_plate", grid_points(grid), {"end_time": args.end_time})
     load_before = os.getloadavg()
+    capacity = [machine_capacity(args.workers)]
     run_task(tasks[0])                                     # load the kernels in this process first
 
     t0 = time.perf_counter()
@@ -61,6 +82,7 @@ def main() -> None:
     serial.update({r.index: r for r in run_serial(tasks[1::2])})   # ... and half after (a load that changes)
     t_serial += time.perf_counter() - t0
     load_after = os.getloadavg()
+    capacity.append(machine_capacity(args.workers))
 
     same = all(rows[i].outputs == serial[i].outputs and rows[i].newton_iterations == serial[i].newton_iterations
                for i in serial)
@@ -83,9 +105,11 @@ def main() -> None:
     print()
     print(f"speed-up {t_serial / t_sweep:.2f}x (sweep alone), {t_serial / (t_sweep + t_start):.2f}x "
           f"(cluster start included); same numbers: {same}; statuses: {sorted(statuses)}")
+    print(f"the machine's capacity for {args.workers} processes (a busy loop in 1 process against {args.workers} at "
+          f"once): {capacity[0]:.2f}x before, {capacity[1]:.2f}x after: the speed-up its load allowed")
     print(f"CPU time of the 16 runs: {cpu_serial:.2f} s in series, {cpu_sweep:.2f} s on the workers; the runs got "
           f"{cpu_serial / t_serial:.2f} cores in series and {cpu_sweep / t_sweep:.2f} cores on the cluster "
-          f"(CPU time / elapsed): the speed-up the machine's load allowed")
+          f"(CPU time / elapsed)")
     print(f"overhead per task: {overhead * 1e3:.0f} ms in the sweep ((elapsed x workers - warm-up - task time) / tasks; "
           f"mean task {busy / len(tasks):.2f} s), {t_noop * 1e3:.1f} ms per empty task")
 

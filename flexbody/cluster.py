@@ -31,6 +31,11 @@ from flexbody.sweep import SweepInterrupted, SweepRow, SweepTask, failed_row, ru
 
 PLUGIN_NAME = "flexbody-kernels"
 
+#: the Dask settings of the local cluster's workers: no statistical profiler (its thread samples the stack of
+#: the running task every 10 ms, which costs a Python-bound run time); on a cluster started by hand the same
+#: with DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=False in the workers' environment (docs/sweeps.md)
+WORKER_CONFIG = {"distributed.worker.profile.enabled": False}
+
 
 def _host(address: str) -> str:
     """The host of a worker address such as ``tcp://10.0.0.5:40211``."""
@@ -137,7 +142,8 @@ def connect(workers: int | None = None, scheduler: str | None = None, quiet: boo
         return
     n = workers or os.cpu_count() or 1
     threads = threads_per_worker(os.cpu_count() or 1, n)
-    with _sigint_ignored():   # the worker processes start immune to Ctrl-C: this process stops them
+    import dask
+    with _sigint_ignored(), dask.config.set(WORKER_CONFIG):   # workers immune to Ctrl-C: this process stops them
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
                                host="127.0.0.1", silence_logs=logging.ERROR,
                                env={"NUMBA_NUM_THREADS": str(threads)})
