@@ -347,6 +347,13 @@ class Model:
             turning = turning.reshape(n, 6) - fext
         return r6, Ke, ext_blocks, press, turning
 
+    def nodal_out_of_balance(self, state: ShellState, lam: float | np.ndarray = 1.0):
+        """f_int - f_ext (n, 6) and f_ext (n, 6) per node [force, moment] in the nodal local frames, all DoFs
+        (constrained ones included: there f_int - f_ext is the support reaction, :mod:`flexbody.results`)."""
+        r6 = self._residual6(state, lam, want_tangent=False)[0]
+        fext = self._external_local(state, lam)[0]
+        return r6, fext
+
     def _rotate_rows(self, state: ShellState, r6: np.ndarray) -> np.ndarray:
         out = r6.copy()
         out[:, :3] = np.einsum("nij,nj->ni", self._row_maps(state), r6[:, :3])
