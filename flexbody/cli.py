@@ -2,6 +2,7 @@
 
     flexbody list
     flexbody run [SCENE] [--set KEY=VALUE ...] [--json FILE] [--h5 FILE.h5] [--rerun FILE.rrd] [--quiet]
+                 [--xdmf FILE.xdmf] [--stresses] [--restart FILE.h5[:STEP]]
     flexbody bench [SCENE ...] [--refine KEY=V1,V2,...] [--set KEY=VALUE ...] [--out DIR] [--quiet]
     flexbody compare SCENE --with exudyn [--set KEY=VALUE ...] [--json FILE] [--quiet]
 
@@ -203,12 +204,14 @@ def _progress_printer(quiet: bool, prefix: str = "") -> _Progress | None:
     return None if quiet else _Progress(prefix)
 
 
-def _run_scene(scene, on_step=None, quiet: bool = False, prefix: str = "", started: float | None = None):
+def _run_scene(scene, on_step=None, quiet: bool = False, prefix: str = "", started: float | None = None,
+               restart=None):
     """``run_scene`` with the progress and compilation notices on stderr (none with ``quiet``)."""
     from flexbody.scenes.scene import run_scene
     progress = _progress_printer(quiet, prefix)
     notify = None if progress is None else progress.notify
-    return run_scene(scene, on_step=on_step, progress=progress, notify=notify, started=started)
+    extra = {} if restart is None else {"restart": restart}
+    return run_scene(scene, on_step=on_step, progress=progress, notify=notify, started=started, **extra)
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -345,18 +348,40 @@ def cmd_run(args) -> int:
     t0 = time.perf_counter()
     params = _parse_sets(args.set or [])
     outputs = {"--json": args.json, "--h5": args.h5, "--rerun": args.rerun}
+    xdmf = getattr(args, "xdmf", None)
+    if xdmf:
+        from flexbody.outputs.xdmf import heavy_data_path
+        outputs.update({"--xdmf": xdmf, "--xdmf (its arrays)": heavy_data_path(xdmf)})
+    restart_spec = getattr(args, "restart", None)
+    if getattr(args, "stresses", False) and not args.h5:
+        raise CliError("--stresses writes the stresses to the --h5 file: give --h5 FILE.h5 too")
     source = _open(args.scene)
-    _check_outputs(outputs, _input_files(source))
-    if args.rerun:
-        import importlib.util
-        if importlib.util.find_spec("rerun") is None:  # looked up, not imported
-            raise CliError("--rerun needs the rerun SDK: pip install 'flexbody[rerun]' (or rerun-sdk)")
+    restart_input = {}
+    if restart_spec:
+        from flexbody.outputs.restart import parse_restart
+        restart_input = {"--restart file": parse_restart(restart_spec)[0]}
+    _check_outputs(outputs, {**_input_files(source), **restart_input})
+    import importlib.util
+    if args.rerun and importlib.util.find_spec("rerun") is None:  # looked up, not imported
+        raise CliError("--rerun needs the rerun SDK: pip install 'flexbody[rerun]' (or rerun-sdk)")
+    if xdmf and importlib.util.find_spec("meshio") is None:
+        raise CliError("--xdmf needs meshio: pip install 'flexbody[mesh]' (or meshio)")
     scene = _build(source, params)
-    _check_outputs(outputs, _input_files(source, scene))
+    _check_outputs(outputs, {**_input_files(source, scene), **restart_input})
+    restart = None
+    if restart_spec:
+        from flexbody.outputs.restart import RestartError, read_restart
+        try:
+            restart = read_restart(restart_spec, scene)
+        except RestartError as exc:
+            raise CliError(str(exc)) from None
+        if scene.kind == "static" and scene.analysis.method != "load_control":
+            raise CliError("--restart continues a load-control path only; this scene uses arc length")
     from flexbody.outputs.recording import OutputStopped, RunRecorder
     try:
         recorder = RunRecorder(scene, h5=args.h5, rerun=args.rerun, directors=args.directors,
-                               warn=lambda message: print(f"flexbody: warning: {message}", file=sys.stderr))
+                               warn=lambda message: print(f"flexbody: warning: {message}", file=sys.stderr),
+                               xdmf=xdmf, stresses=getattr(args, "stresses", False))
     except (OSError, ImportError, ValueError) as exc:
         raise CliError(str(exc).splitlines()[0]) from None
     failure = None
@@ -368,7 +393,7 @@ def cmd_run(args) -> int:
 
     with recorder, signals.installed():
         try:
-            summary = _run_scene(scene, on_step, args.quiet, started=t0)
+            summary = _run_scene(scene, on_step, args.quiet, started=t0, restart=restart)
         except Stopped as exc:
             failure, code = f"stopped by {signal.Signals(exc.signum).name}", 128 + exc.signum
         except KeyboardInterrupt:
@@ -522,6 +547,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--h5", metavar="FILE.h5", help="write the mesh and every step to an HDF5 file")
     run.add_argument("--rerun", metavar="FILE.rrd", help="write a rerun recording (needs rerun-sdk)")
     run.add_argument("--directors", action="store_true", help="with --rerun: also log the directors")
+    run.add_argument("--xdmf", metavar="FILE.xdmf", help="write an XDMF time series for ParaView (arrays in "
+                     "FILE.xdmf.h5; needs meshio)")
+    run.add_argument("--stresses", action="store_true", help="with --h5: also write the stress resultants and "
+                     "reactions of every step")
+    run.add_argument("--restart", metavar="FILE.h5[:STEP]", help="continue from a step (default the last) "
+                     "saved in the --h5 file of an earlier run of this scene")
     run.add_argument("--quiet", action="store_true", help="no progress output")
     run.set_defaults(func=cmd_run)
 

@@ -217,7 +217,7 @@ def _limit_point(model, previous, last, trial: float) -> float | None:
 def load_control(model, load_factors=None, *, n_steps: int = 10, settings: NewtonSettings | None = None,
                  min_step: float = 1e-4, max_step: float | None = None, adaptive: bool = True,
                  on_step: Callable | None = None, state=None, predictor: str = "tangent",
-                 grow_iterations: int | None = None) -> StaticResult:
+                 grow_iterations: int | None = None, load_factor: float = 0.0) -> StaticResult:
     """Follow the path by prescribing the load factor.
 
     Parameters
@@ -230,6 +230,8 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
         almost whatever its size, so that growing only after <= 4 iterations (the rule until 2026-12) kept
         the slit plate at its first step, 0.025, where its levels are 0.05 apart.
     on_step : called as on_step(record, state) after each converged step (outputs hang off here)
+    state, load_factor : the start: a converged state and its load factor (a restart; default the
+        initial state at 0); ``load_factors`` then lists the levels beyond it
     predictor : "tangent" (default): each step starts from the last converged state, so that the first
         Newton correction is the tangent predictor; "secant": it starts from that state moved on by the
         previous step's increment (the sum of its Newton corrections, scaled by the ratio of the load
@@ -262,8 +264,10 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
     state = model.initial_state() if state is None else state
     solver, stats = LinearSolver(), NewtonStats(iteration="mixed" if _mixed(model, settings) else "displacement")
     records: list[StepRecord] = []
-    lam, t0, cutbacks = 0.0, time.perf_counter(), 0
-    first_step = targets[0]
+    lam, t0, cutbacks = float(load_factor), time.perf_counter(), 0
+    if lam != 0.0 and not targets[0] > lam:
+        raise ValueError(f"load factors must lie beyond the start {lam!r}, got {targets[0]!r}")
+    first_step = targets[0] - lam
     step = first_step
     max_step = max_step or (targets[-1] - 0.0)
     attempts = 0
