@@ -76,7 +76,7 @@ def test_static_restart_continues_the_path(tmp_path):
 
 def test_dynamic_restart_gives_the_uninterrupted_run(tmp_path):
     """Positions, frames, v, vdot and the pseudo-acceleration a saved at step 8 of 14: the continuation
-    matches the uninterrupted run (Newton on fresh matrices: to round-off)."""
+    matches the uninterrupted run ("full" policy, fresh matrices in both: measured bit for bit)."""
     full, part = tmp_path / "full.h5", tmp_path / "part.h5"
     _run([*DYNAMIC, "--h5", str(full)])
     _run([*DYNAMIC, "--h5", str(part), "--restart", f"{full}:8"])
