@@ -9,7 +9,6 @@ import pytest
 from flexbody import results
 from flexbody.scenes.builtin import cantilever_end_moment, cantilever_end_shear
 from flexbody.scenes.scene import run_scene
-from integrators.newton import NewtonSettings
 
 pytestmark = pytest.mark.usefixtures("one_numba_thread")
 

@@ -31,7 +31,6 @@ class XdmfWriter:
 
     def __init__(self, path, mesh):
         try:
-            import meshio
             from meshio.xdmf.time_series import TimeSeriesWriter, write_xml
         except ImportError:
             raise ImportError("--xdmf needs meshio: pip install 'flexbody[mesh]' (or meshio)") from None
@@ -46,7 +45,6 @@ class XdmfWriter:
                 inner.h5_file = h5py.File(self.heavy, "w")
                 return inner
 
-        del meshio
         self._w = _Writer(self.path).__enter__()
         self.n_steps = 0
         try:
