@@ -53,10 +53,10 @@ class BucklingResult:
     wall_time_s: float = 0.0
 
     def as_dict(self, scene: str | None = None) -> dict:
-        """A JSON-able summary: the load factors and, per mode, its load factor and largest translation
-        component's direction."""
+        """A JSON-able summary: the critical load factors, ascending, and one entry per mode."""
         return {"scene": scene, "analysis": "linear buckling", "dofs": self.dofs,
                 "load_factors": [float(v) for v in self.load_factors],
+                "modes": [{"mode": i + 1, "load_factor": float(v)} for i, v in enumerate(self.load_factors)],
                 "wall_time_s": self.wall_time_s}
 
 
