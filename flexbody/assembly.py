@@ -402,6 +402,21 @@ class Model:
         d6[idx, :3] = np.einsum("nij,nj->ni", state.frames[idx], d6[idx, :3])
         return d6.ravel()[self.free]
 
+    def conjugate_matrix(self, state: ShellState) -> sp.csc_matrix:
+        """T (free x free, CSC) with :meth:`conjugate` (state, dq) = T dq: R_I on the translations of nodes
+        without a fixed basis, 1 elsewhere. T^T K is the energy's second variation (symmetric at an
+        equilibrium under conservative loads), T^T f_ext the load in the same coordinates: what the
+        stability count and the linear buckling analysis work with."""
+        index = -np.ones((self.body.n_nodes, 6), dtype=np.int64)
+        index.ravel()[self.free] = np.arange(self.n_dof)
+        nodes = np.flatnonzero(~self.has_basis & np.all(index[:, :3] >= 0, axis=1))
+        rows = np.repeat(index[nodes, :3][:, :, None], 3, axis=2)
+        cols = np.repeat(index[nodes, None, :3], 3, axis=1)
+        other = np.setdiff1d(np.arange(self.n_dof), index[nodes, :3].ravel())
+        data = np.concatenate([state.frames[nodes].ravel(), np.ones(other.size)])
+        return sp.csc_matrix((data, (np.concatenate([rows.ravel(), other]), np.concatenate([cols.ravel(), other]))),
+                             shape=(self.n_dof, self.n_dof))
+
     def update(self, state: ShellState, dq: np.ndarray) -> ShellState:
         """q <- q o exp(dq): the 5-DoF nodal update.
 

@@ -279,10 +279,27 @@ def summary_lines(summary) -> list[str]:
                 ", interpolated between recorded steps" if worst.get("measure") == "interpolated" else "")
         lines.append(f"max rel. error   {d['max_rel_error']:.3e}  ({worst['quantity']} at {at}: "
                      f"{worst['value']:.5g} {versus})")
+    if d.get("stability"):
+        lines += stability_lines(d["stability"])
     if not d["converged"]:
         lines.append(f"NOT CONVERGED    {d['message']}")
     if d.get("warnings"):
         lines.append(f"WARNING          not to be trusted: {'; '.join(d['warnings'])} (docs/robustness.md)")
+    return lines
+
+
+def stability_lines(st: dict) -> list[str]:
+    """The stability lines of a static run's summary (``RunSummary.as_dict()["stability"]``): the count of
+    negative eigenvalues of the tangent at the last step, and every limit or bifurcation point passed."""
+    n = st.get("final_negative_eigenvalues")
+    if n is None:
+        return []
+    lines = [f"stability        {'stable' if n == 0 else 'UNSTABLE'} final equilibrium: {n} negative eigenvalue(s) "
+             "of the tangent" + ("" if n == 0 else " (a perturbation leaves it; see the critical points)")]
+    for c in st["critical_points"]:
+        lines.append(f"critical point   {c['kind']} between load factors {c['load_factor_before']:.6g} and "
+                     f"{c['load_factor_after']:.6g} (step {c['step']}; negative eigenvalues "
+                     f"{c['negative_before']} -> {c['negative_after']})")
     return lines
 
 
@@ -527,6 +544,46 @@ def cmd_compare(args) -> int:
               "(needs flexbody.adapters.exudyn.compare_cli and pip install 'flexbody[exudyn]')", file=sys.stderr)
         return 2
     return int(compare_cli(args.scene, params, args.json, args.quiet))
+
+
+# ----------------------------------------------------------------------------------------------------------
+# buckling (wired as ``flexbody modes SCENE --buckling``)
+# ----------------------------------------------------------------------------------------------------------
+
+def cmd_buckling(args) -> int:
+    """Linear buckling of a static scene's load pattern: ``args.scene``, ``args.set`` (KEY=VALUE list),
+    ``args.count`` (modes, default 6) and ``args.json`` (file or None). Prints a table of the critical load
+    factors (the loads of the scene at load factor 1 times the factor); returns 0, or 2 if the load pattern
+    has no positive critical factor (nothing buckles under it)."""
+    from flexbody.buckling import linear_buckling
+    from flexbody.scenes.scene import warm_up_kernels
+    t0 = time.perf_counter()
+    count = 6 if getattr(args, "count", None) is None else args.count
+    if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+        raise CliError(f"--count must be an integer >= 1, got {count!r}")
+    json_path = getattr(args, "json", None)
+    source = _open(args.scene)
+    _check_outputs({"--json": json_path}, _input_files(source))
+    scene = _build(source, _parse_sets(getattr(args, "set", None) or []))
+    if scene.kind != "static":
+        raise CliError(f"linear buckling needs a static scene (its load pattern); {scene.name} is dynamic")
+    warm_up_kernels(scene.model)
+    try:
+        result = linear_buckling(scene.model, count)
+    except ValueError as exc:
+        raise CliError(str(exc).splitlines()[0]) from None
+    print(f"scene            {scene.name} (linear buckling about the unloaded state)")
+    print(f"DoFs             {result.dofs}")
+    print(f"wall time        {result.wall_time_s:.2f} s (total {time.perf_counter() - t0:.2f} s)")
+    print(" mode   critical load factor")
+    for i, lam in enumerate(result.load_factors, 1):
+        print(f"{i:5d}   {lam:.6g}")
+    if not len(result.load_factors):
+        print("no positive critical load factor: the load pattern does not buckle the structure")
+    if json_path:
+        _write_json(json_path, result.as_dict(scene.name))
+        print(f"written          {json_path}")
+    return 0 if len(result.load_factors) else 2
 
 
 # ----------------------------------------------------------------------------------------------------------

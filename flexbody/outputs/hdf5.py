@@ -17,7 +17,10 @@ Layout (format ``flexbody-hdf5``, version 1; ``n`` nodes, ``m`` elements, ``k`` 
     /steps/frames              (k, n, 4) float64 nodal frames R as unit quaternions (w, x, y, z), w >= 0
     /steps/tracked/<name>      (k,)    float64   tracked scalar outputs (NaN where a step did not give one)
     /steps/stats/<name>        (k,)    float64   solver statistics, by default iterations, residual,
-                                                 wall_time (integers stored exactly as float64; NaN = missing)
+                                                 wall_time (integers stored exactly as float64; NaN = missing);
+                                                 a static run adds negative_eigenvalues (of the tangent at the
+                                                 step's equilibrium, 0 = stable) and critical_point (0 none,
+                                                 1 limit point, 2 bifurcation passed since the previous step)
     /steps/fields/<name>       (k, ...) float64  per-step arrays declared at creation (velocities, stresses,
                                                  restart data: docs/output_formats.md)
 

@@ -88,6 +88,22 @@ DYNAMIC_STATS = ("refreshes", "kinetic_energy", "strain_energy", "gravity_energy
                  "angular_momentum_x", "angular_momentum_y", "angular_momentum_z")
 
 
+#: the statistics a static run adds to the HDF5 file, per step: the number of negative eigenvalues of the
+#: tangent at the converged state (NaN: not counted) and the critical point passed since the previous step
+#: (:data:`CRITICAL_CODES`)
+STATIC_STATS = ("negative_eigenvalues", "critical_point")
+#: the ``critical_point`` codes: 0 none, 1 a limit point, 2 a bifurcation point
+CRITICAL_CODES = {None: 0, "limit point": 1, "bifurcation": 2}
+
+
+def static_stats(rec) -> dict[str, float]:
+    """The :data:`STATIC_STATS` of a static step record (``integrators.static.StepRecord``)."""
+    count = getattr(rec, "negative_eigenvalues", None)
+    critical = getattr(rec, "critical", None)
+    return {"negative_eigenvalues": float("nan") if count is None else float(count),
+            "critical_point": float(CRITICAL_CODES[None if critical is None else critical.kind])}
+
+
 def dynamic_stats(rec) -> dict[str, float]:
     """The :data:`DYNAMIC_STATS` of a dynamic step record (``integrators.generalized_alpha.DynamicStepRecord``)."""
     out = {"refreshes": float(rec.refreshed), "kinetic_energy": float(rec.kinetic_energy),
@@ -140,7 +156,7 @@ class RunRecorder:
                 from flexbody.outputs.hdf5 import DEFAULT_STATS, Hdf5Writer
                 from flexbody.outputs.fields import stress_field_shapes
                 from flexbody.outputs.restart import restart_field_shapes
-                stats = DEFAULT_STATS + DYNAMIC_STATS if self.kind == "dynamic" else DEFAULT_STATS
+                stats = DEFAULT_STATS + (DYNAMIC_STATS if self.kind == "dynamic" else STATIC_STATS)
                 n, m = mesh.n_nodes, mesh.n_elements
                 fields = restart_field_shapes(n, scene.model.n_dof, self.kind == "dynamic")
                 if self.kind == "dynamic":
@@ -182,6 +198,7 @@ class RunRecorder:
             if self.kind == "dynamic":
                 stats.update(dynamic_stats(rec))
             else:                              # the out-of-balance force of the state written (module docstring)
+                stats.update(static_stats(rec))
                 stats["residual"] = self._residual(state, where)
             fields = self._fields(rec, state, where)
             try:

@@ -327,7 +327,17 @@ class RunSummary:
             "errors": self.errors, "max_rel_error": self.max_rel_error,
             **timings(self),
             "history": {k: [float(x) for x in v] for k, v in self.history.items()}, "warnings": self.warnings,
+            "stability": stability_summary(self.result),
         }
+
+
+def stability_summary(result: StaticResult) -> dict:
+    """The stability of a static path (JSON-able): the number of negative eigenvalues of the tangent at
+    every converged step (null where not counted), at the last one, and the critical points passed
+    (:class:`integrators.static.CriticalPoint`)."""
+    return {"negative_eigenvalues": [r.negative_eigenvalues for r in result.records],
+            "final_negative_eigenvalues": result.negative_eigenvalues,
+            "critical_points": [c.as_dict() for c in result.critical_points]}
 
 
 def timings(summary) -> dict[str, float]:
