@@ -182,3 +182,18 @@ def test_hdf5_static_stats_carry_the_count(tmp_path):
     assert d["stats"]["negative_eigenvalues"].tolist() == [0.0, 1.0]
     assert d["stats"]["critical_point"].tolist() == [0.0, 2.0]
     assert summary.as_dict()["stability"]["critical_points"][0]["kind"] == "bifurcation"
+
+
+def test_stability_count_can_be_switched_off_in_python_and_toml(tmp_path):
+    from flexbody.scenes.scene import Scene, StaticAnalysis, run_scene
+    from flexbody.scenes.toml_scene import load_toml_scene
+    scene = Scene("column", "strip past Euler", column(),
+                  StaticAnalysis("load_control", (0.5, 1.2), stability=False), [])
+    summary = run_scene(scene)
+    assert all(r.negative_eigenvalues is None for r in summary.result.records)
+    stability = summary.as_dict()["stability"]
+    assert stability["final_negative_eigenvalues"] is None and stability["critical_points"] == []
+    toml = load_toml_scene("examples/cantilever_end_shear.toml", {"analysis.stability": False})
+    assert toml.analysis.stability is False
+    with pytest.raises(Exception, match="stability"):
+        load_toml_scene("examples/cantilever_end_shear.toml", {"analysis.stability": "maybe"})

@@ -140,7 +140,9 @@ class StaticAnalysis:
     """method: "load_control" (steps to the listed load factors) or "arc_length"; ``arc_options``: the
     arc-length step-length controls (``integrators.static.ARC_LENGTH_OPTIONS``: ``max_steps``,
     ``min_increment_ratio``, ``max_increment_ratio``, ``desired_iterations``) that differ from the defaults
-    of :func:`integrators.static.arc_length`."""
+    of :func:`integrators.static.arc_length`. ``stability``: count the negative eigenvalues of the tangent
+    at every converged step and report limit and bifurcation points (one symmetric factorization per step;
+    docs/stability.md)."""
 
     method: str = "load_control"
     load_factors: tuple[float, ...] = tuple(np.linspace(0.05, 1.0, 20))
@@ -148,6 +150,7 @@ class StaticAnalysis:
     max_load_increment: float | None = None
     newton: NewtonSettings = field(default_factory=NewtonSettings)
     arc_options: dict = field(default_factory=dict)
+    stability: bool = True
 
 
 @dataclass(frozen=True, eq=False)
@@ -550,13 +553,14 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
             if not levels:
                 raise ValueError(f"restart at load factor {restart.where:g}: no load level of the scene lies beyond it")
             result = load_control(model, levels, settings=a.newton, on_step=record, state=restart.state,
-                                  load_factor=restart.where)
+                                  load_factor=restart.where, check_stability=a.stability)
         elif a.method == "load_control":
-            result = load_control(model, a.load_factors, settings=a.newton, on_step=record)
+            result = load_control(model, a.load_factors, settings=a.newton, on_step=record,
+                                  check_stability=a.stability)
         else:
             result = arc_length(model, lam_max=max(a.load_factors), initial_increment=a.arc_increment,
                                 max_load_increment=a.max_load_increment, settings=a.newton, on_step=record,
-                                **a.arc_options)
+                                check_stability=a.stability, **a.arc_options)
     wall = time.perf_counter() - t0
     errors = compare_with_reference(history, scene.reference) if scene.reference else []
     return RunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, history, errors, wall,
