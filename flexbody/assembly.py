@@ -347,6 +347,13 @@ class Model:
             turning = turning.reshape(n, 6) - fext
         return r6, Ke, ext_blocks, press, turning
 
+    def nodal_out_of_balance(self, state: ShellState, lam: float | np.ndarray = 1.0):
+        """f_int - f_ext (n, 6) and f_ext (n, 6) per node [force, moment] in the nodal local frames, all DoFs
+        (constrained ones included: there f_int - f_ext is the support reaction, :mod:`flexbody.results`)."""
+        r6 = self._residual6(state, lam, want_tangent=False)[0]
+        fext = self._external_local(state, lam)[0]
+        return r6, fext
+
     def _rotate_rows(self, state: ShellState, r6: np.ndarray) -> np.ndarray:
         out = r6.copy()
         out[:, :3] = np.einsum("nij,nj->ni", self._row_maps(state), r6[:, :3])
@@ -394,6 +401,21 @@ class Model:
         idx = np.flatnonzero(~self.has_basis)
         d6[idx, :3] = np.einsum("nij,nj->ni", state.frames[idx], d6[idx, :3])
         return d6.ravel()[self.free]
+
+    def conjugate_matrix(self, state: ShellState) -> sp.csc_matrix:
+        """T (free x free, CSC) with :meth:`conjugate` (state, dq) = T dq: R_I on the translations of nodes
+        without a fixed basis, 1 elsewhere. T^T K is the energy's second variation (symmetric at an
+        equilibrium under conservative loads), T^T f_ext the load in the same coordinates: what the
+        stability count and the linear buckling analysis work with."""
+        index = -np.ones((self.body.n_nodes, 6), dtype=np.int64)
+        index.ravel()[self.free] = np.arange(self.n_dof)
+        nodes = np.flatnonzero(~self.has_basis & np.all(index[:, :3] >= 0, axis=1))
+        rows = np.repeat(index[nodes, :3][:, :, None], 3, axis=2)
+        cols = np.repeat(index[nodes, None, :3], 3, axis=1)
+        other = np.setdiff1d(np.arange(self.n_dof), index[nodes, :3].ravel())
+        data = np.concatenate([state.frames[nodes].ravel(), np.ones(other.size)])
+        return sp.csc_matrix((data, (np.concatenate([rows.ravel(), other]), np.concatenate([cols.ravel(), other]))),
+                             shape=(self.n_dof, self.n_dof))
 
     def update(self, state: ShellState, dq: np.ndarray) -> ShellState:
         """q <- q o exp(dq): the 5-DoF nodal update.

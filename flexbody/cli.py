@@ -2,6 +2,7 @@
 
     flexbody list
     flexbody run [SCENE] [--set KEY=VALUE ...] [--json FILE] [--h5 FILE.h5] [--rerun FILE.rrd] [--quiet]
+                 [--xdmf FILE.xdmf] [--stresses] [--restart FILE.h5[:STEP]]
     flexbody bench [SCENE ...] [--refine KEY=V1,V2,...] [--set KEY=VALUE ...] [--out DIR] [--quiet]
     flexbody compare SCENE --with exudyn [--set KEY=VALUE ...] [--json FILE] [--quiet]
     flexbody sweep SCENE --grid KEY=V1,V2,... [--grid ...] [--zip] [--workers N | --scheduler ADDRESS]
@@ -205,12 +206,14 @@ def _progress_printer(quiet: bool, prefix: str = "") -> _Progress | None:
     return None if quiet else _Progress(prefix)
 
 
-def _run_scene(scene, on_step=None, quiet: bool = False, prefix: str = "", started: float | None = None):
+def _run_scene(scene, on_step=None, quiet: bool = False, prefix: str = "", started: float | None = None,
+               restart=None):
     """``run_scene`` with the progress and compilation notices on stderr (none with ``quiet``)."""
     from flexbody.scenes.scene import run_scene
     progress = _progress_printer(quiet, prefix)
     notify = None if progress is None else progress.notify
-    return run_scene(scene, on_step=on_step, progress=progress, notify=notify, started=started)
+    extra = {} if restart is None else {"restart": restart}
+    return run_scene(scene, on_step=on_step, progress=progress, notify=notify, started=started, **extra)
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -278,10 +281,27 @@ def summary_lines(summary) -> list[str]:
                 ", interpolated between recorded steps" if worst.get("measure") == "interpolated" else "")
         lines.append(f"max rel. error   {d['max_rel_error']:.3e}  ({worst['quantity']} at {at}: "
                      f"{worst['value']:.5g} {versus})")
+    if d.get("stability"):
+        lines += stability_lines(d["stability"])
     if not d["converged"]:
         lines.append(f"NOT CONVERGED    {d['message']}")
     if d.get("warnings"):
         lines.append(f"WARNING          not to be trusted: {'; '.join(d['warnings'])} (docs/robustness.md)")
+    return lines
+
+
+def stability_lines(st: dict) -> list[str]:
+    """The stability lines of a static run's summary (``RunSummary.as_dict()["stability"]``): the count of
+    negative eigenvalues of the tangent at the last step, and every limit or bifurcation point passed."""
+    n = st.get("final_negative_eigenvalues")
+    if n is None:
+        return []
+    lines = [f"stability        {'stable' if n == 0 else 'UNSTABLE'} final equilibrium: {n} negative eigenvalue(s) "
+             "of the tangent" + ("" if n == 0 else " (a perturbation leaves it; see the critical points)")]
+    for c in st["critical_points"]:
+        lines.append(f"critical point   {c['kind']} between load factors {c['load_factor_before']:.6g} and "
+                     f"{c['load_factor_after']:.6g} (step {c['step']}; negative eigenvalues "
+                     f"{c['negative_before']} -> {c['negative_after']})")
     return lines
 
 
@@ -347,18 +367,40 @@ def cmd_run(args) -> int:
     t0 = time.perf_counter()
     params = _parse_sets(args.set or [])
     outputs = {"--json": args.json, "--h5": args.h5, "--rerun": args.rerun}
+    xdmf = getattr(args, "xdmf", None)
+    if xdmf:
+        from flexbody.outputs.xdmf import heavy_data_path
+        outputs.update({"--xdmf": xdmf, "--xdmf (its arrays)": heavy_data_path(xdmf)})
+    restart_spec = getattr(args, "restart", None)
+    if getattr(args, "stresses", False) and not args.h5:
+        raise CliError("--stresses writes the stresses to the --h5 file: give --h5 FILE.h5 too")
     source = _open(args.scene)
-    _check_outputs(outputs, _input_files(source))
-    if args.rerun:
-        import importlib.util
-        if importlib.util.find_spec("rerun") is None:  # looked up, not imported
-            raise CliError("--rerun needs the rerun SDK: pip install 'flexbody[rerun]' (or rerun-sdk)")
+    restart_input = {}
+    if restart_spec:
+        from flexbody.outputs.restart import parse_restart
+        restart_input = {"--restart file": parse_restart(restart_spec)[0]}
+    _check_outputs(outputs, {**_input_files(source), **restart_input})
+    import importlib.util
+    if args.rerun and importlib.util.find_spec("rerun") is None:  # looked up, not imported
+        raise CliError("--rerun needs the rerun SDK: pip install 'flexbody[rerun]' (or rerun-sdk)")
+    if xdmf and importlib.util.find_spec("meshio") is None:
+        raise CliError("--xdmf needs meshio: pip install 'flexbody[mesh]' (or meshio)")
     scene = _build(source, params)
-    _check_outputs(outputs, _input_files(source, scene))
+    _check_outputs(outputs, {**_input_files(source, scene), **restart_input})
+    restart = None
+    if restart_spec:
+        from flexbody.outputs.restart import RestartError, read_restart
+        try:
+            restart = read_restart(restart_spec, scene)
+        except RestartError as exc:
+            raise CliError(str(exc)) from None
+        if scene.kind == "static" and scene.analysis.method != "load_control":
+            raise CliError("--restart continues a load-control path only; this scene uses arc length")
     from flexbody.outputs.recording import OutputStopped, RunRecorder
     try:
         recorder = RunRecorder(scene, h5=args.h5, rerun=args.rerun, directors=args.directors,
-                               warn=lambda message: print(f"flexbody: warning: {message}", file=sys.stderr))
+                               warn=lambda message: print(f"flexbody: warning: {message}", file=sys.stderr),
+                               xdmf=xdmf, stresses=getattr(args, "stresses", False))
     except (OSError, ImportError, ValueError) as exc:
         raise CliError(str(exc).splitlines()[0]) from None
     failure = None
@@ -370,7 +412,7 @@ def cmd_run(args) -> int:
 
     with recorder, signals.installed():
         try:
-            summary = _run_scene(scene, on_step, args.quiet, started=t0)
+            summary = _run_scene(scene, on_step, args.quiet, started=t0, restart=restart)
         except Stopped as exc:
             failure, code = f"stopped by {signal.Signals(exc.signum).name}", 128 + exc.signum
         except KeyboardInterrupt:
@@ -666,6 +708,46 @@ def cmd_compare(args) -> int:
 
 
 # ----------------------------------------------------------------------------------------------------------
+# buckling (wired as ``flexbody modes SCENE --buckling``)
+# ----------------------------------------------------------------------------------------------------------
+
+def cmd_buckling(args) -> int:
+    """Linear buckling of a static scene's load pattern: ``args.scene``, ``args.set`` (KEY=VALUE list),
+    ``args.count`` (modes, default 6) and ``args.json`` (file or None). Prints a table of the critical load
+    factors (the loads of the scene at load factor 1 times the factor); returns 0, or 2 if the load pattern
+    has no positive critical factor (nothing buckles under it)."""
+    from flexbody.buckling import linear_buckling
+    from flexbody.scenes.scene import warm_up_kernels
+    t0 = time.perf_counter()
+    count = 6 if getattr(args, "count", None) is None else args.count
+    if isinstance(count, bool) or not isinstance(count, int) or count < 1:
+        raise CliError(f"--count must be an integer >= 1, got {count!r}")
+    json_path = getattr(args, "json", None)
+    source = _open(args.scene)
+    _check_outputs({"--json": json_path}, _input_files(source))
+    scene = _build(source, _parse_sets(getattr(args, "set", None) or []))
+    if scene.kind != "static":
+        raise CliError(f"linear buckling needs a static scene (its load pattern); {scene.name} is dynamic")
+    warm_up_kernels(scene.model)
+    try:
+        result = linear_buckling(scene.model, count)
+    except ValueError as exc:
+        raise CliError(str(exc).splitlines()[0]) from None
+    print(f"scene            {scene.name} (linear buckling about the unloaded state)")
+    print(f"DoFs             {result.dofs}")
+    print(f"wall time        {result.wall_time_s:.2f} s (total {time.perf_counter() - t0:.2f} s)")
+    print(" mode   critical load factor")
+    for i, lam in enumerate(result.load_factors, 1):
+        print(f"{i:5d}   {lam:.6g}")
+    if not len(result.load_factors):
+        print("no positive critical load factor: the load pattern does not buckle the structure")
+    if json_path:
+        _write_json(json_path, result.as_dict(scene.name))
+        print(f"written          {json_path}")
+    return 0 if len(result.load_factors) else 2
+
+
+# ----------------------------------------------------------------------------------------------------------
 # main
 # ----------------------------------------------------------------------------------------------------------
 
@@ -692,6 +774,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--h5", metavar="FILE.h5", help="write the mesh and every step to an HDF5 file")
     run.add_argument("--rerun", metavar="FILE.rrd", help="write a rerun recording (needs rerun-sdk)")
     run.add_argument("--directors", action="store_true", help="with --rerun: also log the directors")
+    run.add_argument("--xdmf", metavar="FILE.xdmf", help="write an XDMF time series for ParaView (arrays in "
+                     "FILE.xdmf.h5; needs meshio)")
+    run.add_argument("--stresses", action="store_true", help="with --h5: also write the stress resultants and "
+                     "reactions of every step")
+    run.add_argument("--restart", metavar="FILE.h5[:STEP]", help="continue from a step (default the last) "
+                     "saved in the --h5 file of an earlier run of this scene")
     run.add_argument("--quiet", action="store_true", help="no progress output")
     run.set_defaults(func=cmd_run)
 

@@ -141,6 +141,9 @@ class SpinningModel:
     def with_stresses(self, state: ShellState) -> ShellState:
         return self.model.with_stresses(state)
 
+    def conjugate_matrix(self, state: ShellState) -> sp.csc_matrix:
+        return self.model.conjugate_matrix(state)
+
     def check_static_support(self) -> None:
         """Nothing to check beyond the gauge: the centrifugal stiffness restrains the other rigid motions."""
 

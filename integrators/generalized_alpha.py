@@ -140,6 +140,8 @@ class DynamicStepRecord:
     angular_momentum: np.ndarray
     wall_time: float
     dissipated_energy: float = 0.0    # D(t), the work of the damping forces since the start
+    #: the step's end values on the free DoFs {"v", "vdot", "a"}: set for the records given to ``on_step``
+    motion: dict | None = None
 
     @property
     def total_energy(self) -> float:
@@ -377,7 +379,9 @@ class _Stepper:
 
 def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.ndarray | None = None,
                       settings: AlphaSettings | None = None, t_start: float = 0.0,
-                      on_step: Callable | None = None, record_every: int = 1) -> DynamicResult:
+                      on_step: Callable | None = None, record_every: int = 1,
+                      acceleration: np.ndarray | None = None, pseudo_acceleration: np.ndarray | None = None,
+                      first_step: int = 0, dissipated_energy: float = 0.0) -> DynamicResult:
     """Integrate from t_start to t_end with a fixed step: h, rounded down so that whole steps end at t_end.
 
     Parameters
@@ -387,6 +391,9 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
     on_step : called as on_step(record, state, v) after every recorded step, and for the last converged
         step when a ``KeyboardInterrupt`` stops the run between two recorded steps (then re-raised)
     record_every : keep every k-th step record (energy and momenta are evaluated only for kept steps)
+    acceleration, pseudo_acceleration, first_step, dissipated_energy : a continuation (restart) of a run at
+        its step ``first_step``: vdot and a there (default: consistent, a = vdot), the step numbers and the
+        record_every grid counted on from it, and the work D dissipated until then
 
     The initial acceleration is consistent (vdot_0 = -M^-1 g(q_0, t_0), a_0 = vdot_0), which the second
     order of the method requires (BCA; Arnold & Bruls 2007). A step that does not converge is retried as two half
@@ -403,11 +410,11 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
     if hasattr(dyn, "prescribe"):
         q = dyn.prescribe(q, t_start)
     v = np.zeros(dyn.n_dof) if velocity is None else np.asarray(velocity, float).copy()
-    vdot = dyn.initial_acceleration(q, t_start, v)
-    a = vdot.copy()
+    vdot = dyn.initial_acceleration(q, t_start, v) if acceleration is None else np.asarray(acceleration, float).copy()
+    a = vdot.copy() if pseudo_acceleration is None else np.asarray(pseudo_acceleration, float).copy()
     t0 = time.perf_counter()
-    initial = _record(dyn, 0, t_start, q, v, 0, [], [], 0, 1, t0)
-    f_damp, dissipated = _damping_force(dyn, q, v), 0.0      # f_d and D = int v . f_d dt (module docstring)
+    initial = _record(dyn, first_step, t_start, q, v, 0, [], [], 0, 1, t0, dissipated_energy)
+    f_damp, dissipated = _damping_force(dyn, q, v), float(dissipated_energy)  # f_d, D = int v . f_d dt
     records: list[DynamicStepRecord] = []
     t, done, last = t_start, 0, 0  # (q, v) after `done` steps at t; `last`: the last step given to on_step
     try:
@@ -423,15 +430,18 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
             f_new = _damping_force(dyn, q, v)
             dissipated += 0.25 * h * float((v_old + v) @ (f_damp + f_new))
             f_damp = f_new
-            if (n + 1) % record_every == 0 or n + 1 == n_steps:
-                rec = _record(dyn, n + 1, t, q, v, its, res, cor, ref, sub, t0, dissipated)
+            if (first_step + n + 1) % record_every == 0 or n + 1 == n_steps:
+                rec = _record(dyn, first_step + n + 1, t, q, v, its, res, cor, ref, sub, t0, dissipated)
+                rec.motion = {"v": v, "vdot": vdot, "a": a}
                 records.append(rec)
                 last = n + 1
                 if on_step is not None:
                     on_step(rec, q, v)
     except KeyboardInterrupt:  # Ctrl-C / a stop request: hand the last converged step over, then stop
         if on_step is not None and done > last:
-            on_step(_record(dyn, done, t, q, v, 0, [], [], 0, 1, t0, dissipated), q, v)
+            rec = _record(dyn, first_step + done, t, q, v, 0, [], [], 0, 1, t0, dissipated)
+            rec.motion = {"v": v, "vdot": vdot, "a": a}
+            on_step(rec, q, v)
         raise
     return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, True, "completed",
                          time.perf_counter() - t0, dissipated)

@@ -15,19 +15,54 @@ from typing import Callable
 
 import numpy as np
 
-from integrators.linear import LinearSolver, SingularMatrixError
+from integrators.linear import LinearSolver, SingularMatrixError, inertia
 from integrators.newton import NewtonSettings, NewtonStats, newton_solve, work_norm
 
 
 @dataclass
 class StepRecord:
-    """One converged step."""
+    """One converged step.
+
+    ``negative_eigenvalues``: the number of negative eigenvalues of the (symmetrized) tangent on the free
+    DoFs at the converged state, 0 for a stable equilibrium (None if not counted, see :func:`stability`);
+    ``critical``: the limit or bifurcation point the path passed between the previous converged state and
+    this one, if any (:class:`CriticalPoint`).
+    """
 
     step: int
     load_factor: float
     iterations: int
     residuals: list[float]
     wall_time: float
+    negative_eigenvalues: int | None = None
+    critical: "CriticalPoint | None" = None
+    load_compliance: float = float("nan")   # f . K^-1 f at the converged state (see :func:`stability`)
+
+
+@dataclass
+class CriticalPoint:
+    """A critical point passed between two converged steps: the number of negative eigenvalues of the
+    tangent changed from ``negative_before`` to ``negative_after``.
+
+    ``kind``: "limit point" if the load compliance f . K^-1 f changed sign with it (the buckling mode has a
+    component along the load: the load factor turns, det K changes sign with the load), "bifurcation" if it
+    kept its sign (the mode is orthogonal to the load: the path goes on through it and another branch
+    crosses it).
+    """
+
+    kind: str
+    step: int                       # the first converged step past the point
+    load_factor_before: float
+    load_factor_after: float
+    negative_before: int
+    negative_after: int
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+    def __str__(self) -> str:
+        return (f"{self.kind} between load factors {self.load_factor_before:.6g} and {self.load_factor_after:.6g} "
+                f"(step {self.step}; negative eigenvalues {self.negative_before} -> {self.negative_after})")
 
 
 @dataclass
@@ -57,6 +92,17 @@ class StaticResult:
     wall_time: float = 0.0
     cutbacks: int = 0
     failure: FailureReport | None = None
+
+    @property
+    def critical_points(self) -> list[CriticalPoint]:
+        """The limit and bifurcation points passed on the path (from the step records)."""
+        return critical_points(self.records)
+
+    @property
+    def negative_eigenvalues(self) -> int | None:
+        """The number of negative eigenvalues of the tangent at the last converged state (0: stable; None:
+        not counted or no step)."""
+        return self.records[-1].negative_eigenvalues if self.records else None
 
 
 MAX_EXTRAPOLATION = 2.0   # the secant predictor extrapolates at most twice the previous step
@@ -192,6 +238,69 @@ def _load_compliance(model, state, lam: float) -> float:
     return float((conjugate(state, v) if conjugate is not None else v) @ f)
 
 
+def stability_matrix(model, state, lam: float):
+    """The symmetric tangent A and the load g in the same coordinates, at a converged state.
+
+    The model's tangent K = dr/dq pairs force rows with increment columns that are not always the virtual
+    work conjugates of the rows (a shell's rows are global force components, its columns local nodal
+    increments); ``model.conjugate_matrix(state)`` (optional) is the map T with w = T dq the increment
+    paired with the rows, so that T^T K is the second variation of the energy, symmetric at an equilibrium
+    under conservative loads. Its small skew part (moment residuals of unconstrained drilling components,
+    follower loads) is dropped: A = sym(T^T K), g = T^T f. The stresses of a mixed iteration are dropped
+    first (the tangent of the state itself).
+    """
+    if getattr(state, "stress", None) is not None:
+        state = dataclasses.replace(state, stress=None)
+    _, K = model.residual_and_tangent(state, lam)
+    f = model.external_force(state)
+    conjugate_matrix = getattr(model, "conjugate_matrix", None)
+    if conjugate_matrix is not None:
+        T = conjugate_matrix(state)
+        K, f = T.T @ K, T.T @ f
+    return (0.5 * (K + K.T)).tocsc(), f
+
+
+def stability(model, state, lam: float) -> tuple[int | None, float]:
+    """The number of negative eigenvalues of the tangent at a converged state, by Sylvester's law on the
+    symmetric LDL^T factorization of :func:`stability_matrix` (:func:`integrators.linear.inertia`), and the
+    load compliance g . A^-1 g on the same factorization (it changes sign at a limit point, not at a
+    bifurcation). (None, nan) if the state or the tangent is not finite or a pivot is exactly zero."""
+    try:
+        A, g = stability_matrix(model, state, lam)
+        factors = inertia(A)
+        return factors.negative, float(g @ factors.solve(g))
+    except (FloatingPointError, SingularMatrixError):
+        return None, float("nan")
+
+
+def critical_points(records: list[StepRecord]) -> list[CriticalPoint]:
+    """The critical points marked on a run's step records (``StepRecord.critical``)."""
+    return [rec.critical for rec in records if rec.critical is not None]
+
+
+class _StabilityTracker:
+    """Counts the negative eigenvalues at every converged state (:func:`stability`) and marks the critical
+    points between consecutive states: where the count changes, a limit point if the load compliance
+    changed sign with it, else a bifurcation (:class:`CriticalPoint`)."""
+
+    def __init__(self, model, state, lam: float, enabled: bool):
+        self.model, self.enabled = model, enabled
+        self.lam, (self.count, self.compliance) = lam, (stability(model, state, lam) if enabled
+                                                        else (None, float("nan")))
+
+    def record(self, step: int, state, lam: float, iterations: int, residuals, wall_time: float) -> StepRecord:
+        if not self.enabled:
+            return StepRecord(step, lam, iterations, residuals, wall_time)
+        count, compliance = stability(self.model, state, lam)
+        critical = None
+        if count is not None and self.count is not None and count != self.count:
+            turned = np.sign(compliance) != np.sign(self.compliance)
+            critical = CriticalPoint("limit point" if turned else "bifurcation", step, self.lam, lam,
+                                     self.count, count)
+        self.lam, self.count, self.compliance = lam, count, compliance
+        return StepRecord(step, lam, iterations, residuals, wall_time, count, critical, compliance)
+
+
 def _limit_point(model, previous, last, trial: float) -> float | None:
     """The load factor of a limit point that stops load control in the step from ``last`` to ``trial``, or
     None if the failure has another cause.
@@ -217,7 +326,8 @@ def _limit_point(model, previous, last, trial: float) -> float | None:
 def load_control(model, load_factors=None, *, n_steps: int = 10, settings: NewtonSettings | None = None,
                  min_step: float = 1e-4, max_step: float | None = None, adaptive: bool = True,
                  on_step: Callable | None = None, state=None, predictor: str = "tangent",
-                 grow_iterations: int | None = None) -> StaticResult:
+                 grow_iterations: int | None = None, load_factor: float = 0.0,
+                 check_stability: bool = True) -> StaticResult:
     """Follow the path by prescribing the load factor.
 
     Parameters
@@ -230,6 +340,8 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
         almost whatever its size, so that growing only after <= 4 iterations (the rule until 2026-12) kept
         the slit plate at its first step, 0.025, where its levels are 0.05 apart.
     on_step : called as on_step(record, state) after each converged step (outputs hang off here)
+    state, load_factor : the start: a converged state and its load factor (a restart; default the
+        initial state at 0); ``load_factors`` then lists the levels beyond it
     predictor : "tangent" (default): each step starts from the last converged state, so that the first
         Newton correction is the tangent predictor; "secant": it starts from that state moved on by the
         previous step's increment (the sum of its Newton corrections, scaled by the ratio of the load
@@ -244,6 +356,11 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
 
     A run that stops at a limit point says so (``FailureReport.limit_point``, :func:`_limit_point`): "limit
     point at load factor X: ...; use arc length".
+
+    check_stability : count the negative eigenvalues of the tangent at every converged state and mark the
+        limit and bifurcation points passed (``StepRecord.negative_eigenvalues``, ``StepRecord.critical``,
+        ``StaticResult.critical_points``; :func:`stability`): one more tangent and symmetric factorization
+        per step (docs/stability.md)
     """
     settings = settings or NewtonSettings()
     targets = np.linspace(0, 1, n_steps + 1)[1:] if load_factors is None else np.asarray(load_factors, float)
@@ -262,8 +379,11 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
     state = model.initial_state() if state is None else state
     solver, stats = LinearSolver(), NewtonStats(iteration="mixed" if _mixed(model, settings) else "displacement")
     records: list[StepRecord] = []
-    lam, t0, cutbacks = 0.0, time.perf_counter(), 0
-    first_step = targets[0]
+    lam, t0, cutbacks = float(load_factor), time.perf_counter(), 0
+    if lam != 0.0 and not targets[0] > lam:
+        raise ValueError(f"load factors must lie beyond the start {lam!r}, got {targets[0]!r}")
+    tracker = _StabilityTracker(model, state, lam, check_stability)
+    first_step = targets[0] - lam
     step = first_step
     max_step = max_step or (targets[-1] - 0.0)
     attempts = 0
@@ -334,7 +454,8 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
                 prev_increment, prev_dlam, use_predictor = increment, trial - lam, True
             previous = (state, lam)
             state, lam = new_state, trial
-            rec = StepRecord(len(records) + 1, lam, out.iterations, out.residuals, time.perf_counter() - t0)
+            rec = tracker.record(len(records) + 1, state, lam, out.iterations, out.residuals,
+                                 time.perf_counter() - t0)
             records.append(rec)
             if on_step is not None:
                 on_step(rec, state)
@@ -350,7 +471,7 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                settings: NewtonSettings | None = None, min_increment_ratio: float = 1e-3,
                max_increment_ratio: float = 25.0, desired_iterations: int = 5,
                max_load_increment: float | None = None,
-               on_step: Callable | None = None, state=None) -> StaticResult:
+               on_step: Callable | None = None, state=None, check_stability: bool = True) -> StaticResult:
     """Crisfield's cylindrical arc-length method: ||Delta q / scale|| = Delta l in each step.
 
     The first step's arc length follows from a load increment ``initial_increment``. Each iteration solves
@@ -375,6 +496,9 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
     slightly different predictor moves it along the path only through the step-length control
     (``max_load_increment``): on the pulled cylinder the outputs at the reference levels changed by 7e-6 of
     their range against a fresh tangent for every predictor.
+
+    ``check_stability`` as in :func:`load_control`: at a limit point the count of negative eigenvalues
+    changes where the load factor turns.
     """
     settings = settings or NewtonSettings()
     if not (np.isfinite(lam_max) and lam_max > 0 and np.isfinite(initial_increment) and initial_increment > 0):
@@ -389,6 +513,7 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
     solver, stats = LinearSolver(), NewtonStats(iteration="mixed" if _mixed(model, settings) else "displacement")
     records: list[StepRecord] = []
     t0, lam, cutbacks, attempts = time.perf_counter(), 0.0, 0, 0
+    tracker = _StabilityTracker(model, state, lam, check_stability)
 
     def stop(trial_lam, residuals, reason, non_finite=False):
         failure = FailureReport(len(records) + 1, lam, float(trial_lam), list(residuals), reason, attempts,
@@ -509,7 +634,8 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                 conjugate=model.conjugate, held_lag=held_lag, load=load,
                 min_iterations=int(trial_lam != lam_max))
             if out.converged:
-                rec = StepRecord(len(records) + 1, lam_max, out.iterations, out.residuals, time.perf_counter() - t0)
+                rec = tracker.record(len(records) + 1, state_end, lam_max, out.iterations, out.residuals,
+                                     time.perf_counter() - t0)
                 records.append(rec)
                 if on_step is not None:
                     on_step(rec, state_end)
@@ -525,7 +651,7 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
         prev_dir = Dq / model.dof_scale / _scaled_norm(model, Dq)
         prev_dlam_sign = np.sign(trial_lam - lam) or prev_dlam_sign
         state, lam = trial, trial_lam
-        rec = StepRecord(len(records) + 1, lam, it, residuals, time.perf_counter() - t0)
+        rec = tracker.record(len(records) + 1, state, lam, it, residuals, time.perf_counter() - t0)
         records.append(rec)
         if on_step is not None:
             on_step(rec, state)

@@ -17,7 +17,12 @@ Layout (format ``flexbody-hdf5``, version 1; ``n`` nodes, ``m`` elements, ``k`` 
     /steps/frames              (k, n, 4) float64 nodal frames R as unit quaternions (w, x, y, z), w >= 0
     /steps/tracked/<name>      (k,)    float64   tracked scalar outputs (NaN where a step did not give one)
     /steps/stats/<name>        (k,)    float64   solver statistics, by default iterations, residual,
-                                                 wall_time (integers stored exactly as float64; NaN = missing)
+                                                 wall_time (integers stored exactly as float64; NaN = missing);
+                                                 a static run adds negative_eigenvalues (of the tangent at the
+                                                 step's equilibrium, 0 = stable) and critical_point (0 none,
+                                                 1 limit point, 2 bifurcation passed since the previous step)
+    /steps/fields/<name>       (k, ...) float64  per-step arrays declared at creation (velocities, stresses,
+                                                 restart data: docs/output_formats.md)
 
 Lengths are in the unit of the mesh coordinates, time in seconds, everything else as the scene defines it.
 The quaternion ``q = (w, x, y, z)`` of a frame ``R`` (columns: the frame axes, third column the director)
@@ -133,10 +138,11 @@ def matrices_from_quaternions(q: np.ndarray) -> np.ndarray:
 # ----------------------------------------------------------------------------------------------------------
 
 def record_stats(rec) -> dict[str, float]:
-    """The default statistics of a solver step record (``.iterations``, ``.residuals``, ``.wall_time``)."""
-    residuals = list(getattr(rec, "residuals", None) or [])
+    """The default statistics of a solver step record (``.iterations``, ``.residuals``: the last finite one,
+    ``.wall_time``)."""
+    residuals = [float(r) for r in (getattr(rec, "residuals", None) or []) if math.isfinite(r)]
     return {"iterations": int(rec.iterations),
-            "residual": float(residuals[-1]) if residuals else math.nan,
+            "residual": residuals[-1] if residuals else math.nan,
             "wall_time": float(rec.wall_time)}
 
 
@@ -173,16 +179,21 @@ class Hdf5Writer:
     outputs : names of the tracked scalars (one data set each under ``/steps/tracked``)
     kind : "static" (steps carry a load factor) or "dynamic" (steps carry a time)
     stats : names of the solver statistics (one data set each under ``/steps/stats``)
+    fields : per-step arrays {name: shape of one step} (one data set each under ``/steps/fields``, (k,) +
+        shape, float64): velocities, stress resultants, the restart data (docs/output_formats.md)
     """
 
     def __init__(self, path, mesh, scene_name: str, parameters: dict, outputs: list[str], *,
-                 kind: str = "static", stats: Sequence[str] = DEFAULT_STATS):
+                 kind: str = "static", stats: Sequence[str] = DEFAULT_STATS,
+                 fields: dict[str, tuple[int, ...]] | None = None):
         if kind not in KINDS:
             raise ValueError(f"kind must be 'static' or 'dynamic', got {kind!r}")
         self.path = os.fspath(path)
         self.kind = kind
         self.outputs = _check_names(outputs, "output")
         self.stats = _check_names(stats, "stat")
+        self.fields = {name: tuple(int(v) for v in shape)
+                       for name, shape in zip(_check_names(list(fields or {}), "field"), (fields or {}).values())}
         nodes = np.asarray(mesh.nodes, dtype=float)
         elements = np.asarray(mesh.elements)
         directors = np.asarray(mesh.directors, dtype=float)
@@ -226,6 +237,7 @@ class Hdf5Writer:
             f.attrs["parameters"] = params_json
             f.attrs["outputs"] = json.dumps(self.outputs)
             f.attrs["stats"] = json.dumps(self.stats)
+            f.attrs["fields"] = json.dumps(list(self.fields))
             g = f.create_group("mesh")
             g.create_dataset("nodes", data=nodes)
             g.create_dataset("elements", data=elements.astype(np.int64))
@@ -241,6 +253,8 @@ class Hdf5Writer:
             tg, sg = s.create_group("tracked"), s.create_group("stats")
             self._tracked = {name: series(tg, name) for name in self.outputs}
             self._stats = {name: series(sg, name) for name in self.stats}
+            fg = s.create_group("fields")
+            self._fields = {name: series(fg, name, tail=shape) for name, shape in self.fields.items()}
             self._param = series(s, KINDS[kind])
             self._index = series(s, "index", dtype="i8", fill=-1)
             f.swmr_mode = True
@@ -262,7 +276,7 @@ class Hdf5Writer:
         return not self._file.id.valid
 
     def write_step(self, step: int, load_factor_or_time: float, state, tracked: dict[str, float] | None = None,
-                   stats: dict[str, float | int] | None = None) -> None:
+                   stats: dict[str, float | int] | None = None, fields: dict[str, np.ndarray] | None = None) -> None:
         """Append one step (``state`` has ``.x`` (n, 3) and ``.frames`` (n, 3, 3)) and flush the file.
 
         Tracked outputs or stats not given for this step are stored as NaN; names not declared at creation
@@ -286,6 +300,16 @@ class Hdf5Writer:
         rows = [(self._data[0][1], x), (self._data[1][1], quaternions_from_matrices(frames))]
         rows += [(ds, float(tracked.get(name, math.nan))) for name, ds in self._tracked.items()]
         rows += [(ds, float(stats.get(name, math.nan))) for name, ds in self._stats.items()]
+        fields = fields or {}
+        unknown = [k for k in fields if k not in self._fields]
+        if unknown:
+            raise KeyError(f"field(s) {unknown} were not declared when {self.path!r} was created "
+                           f"(declared: {list(self._fields)})")
+        for name, ds in self._fields.items():
+            value = np.asarray(fields.get(name, np.full(self.fields[name], math.nan)), dtype=float)
+            if value.shape != self.fields[name]:
+                raise ValueError(f"field {name!r} must have shape {self.fields[name]}, got {value.shape}")
+            rows.append((ds, value))
         rows.append((self._param, float(load_factor_or_time)))
         if int(step) < 0:
             raise ValueError(f"step numbers must be >= 0, got {step!r}")
@@ -310,7 +334,8 @@ class Hdf5Writer:
     def _step_bytes(self, k: int) -> int:
         """Bytes that step ``k`` adds to the file: positions and frames, and new chunks every SCALAR_CHUNK steps."""
         scalars = len(self._tracked) + len(self._stats) + 2
-        return self.n_nodes * 7 * 8 + (scalars * SCALAR_CHUNK * 8 if k % SCALAR_CHUNK == 0 else 0)
+        extra = sum(8 * math.prod(shape) for shape in self.fields.values())
+        return self.n_nodes * 7 * 8 + extra + (scalars * SCALAR_CHUNK * 8 if k % SCALAR_CHUNK == 0 else 0)
 
     def flush(self) -> None:
         if not self.closed and not self._failed:
@@ -350,7 +375,7 @@ def read_hdf5(path) -> dict:
     Returns a dict with ``scene``, ``kind``, ``parameters`` (dict), ``flexbody_version``, ``nodes``,
     ``elements``, ``directors``, ``step`` (k,), ``load_factor`` or ``time`` (k,), ``x`` (k, n, 3),
     ``quaternions`` (k, n, 4), ``frames`` (k, n, 3, 3) rotation matrices, ``tracked`` and ``stats``
-    (dicts of (k,) arrays). Only complete steps are returned.
+    (dicts of (k,) arrays), ``fields`` (dict of (k, ...) arrays). Only complete steps are returned.
     """
     path = os.fspath(path)
     try:
@@ -402,6 +427,8 @@ def _read_open_file(f: h5py.File, path: str) -> dict:
     series = {"x": s["x"], "frames": s["frames"], "param": s[KINDS[kind]], "index": s["index"]}
     series.update({("tracked", k): v for k, v in s["tracked"].items()})
     series.update({("stats", k): v for k, v in s["stats"].items()})
+    field_names = json.loads(f.attrs.get("fields", "[]"))
+    series.update({("fields", k): s["fields"][k] for k in field_names})
     for ds in series.values():
         ds.refresh()
     k = _complete_steps(series)
@@ -414,5 +441,6 @@ def _read_open_file(f: h5py.File, path: str) -> dict:
         "x": series["x"][:k], "quaternions": q, "frames": matrices_from_quaternions(q),
         "tracked": {name: s["tracked"][name][:k] for name in json.loads(f.attrs["outputs"])},
         "stats": {name: s["stats"][name][:k] for name in json.loads(f.attrs["stats"])},
+        "fields": {name: s["fields"][name][:k] for name in field_names},
     }
     return out

@@ -6,8 +6,12 @@ or diverged analysis, an exception, Ctrl-C), so what was written stays readable.
 
 When a writer fails: the HDF5 file holds the results that were asked for, so a step it cannot take (a full
 disk, an I/O error) stops the run with :class:`OutputStopped` (the file keeps every complete step); the
-rerun recording is for looking only, so its failure is reported once through ``warn`` and the recording is
-closed where it stands, while the solve and the HDF5 file go on.
+rerun recording and the XDMF series are for looking only, so their failure is reported once through ``warn``
+and the file is closed where it stands, while the solve and the HDF5 file go on.
+
+The HDF5 ``residual`` of a static step is the work norm of the residual r(q, lambda) of the state written
+(evaluated for the file: the solver's last residual is NaN when it stopped on the increment); of a dynamic
+step, the solver's last residual norm.
 """
 
 from __future__ import annotations
@@ -84,6 +88,22 @@ DYNAMIC_STATS = ("refreshes", "kinetic_energy", "strain_energy", "gravity_energy
                  "angular_momentum_x", "angular_momentum_y", "angular_momentum_z")
 
 
+#: the statistics a static run adds to the HDF5 file, per step: the number of negative eigenvalues of the
+#: tangent at the converged state (NaN: not counted) and the critical point passed since the previous step
+#: (:data:`CRITICAL_CODES`)
+STATIC_STATS = ("negative_eigenvalues", "critical_point")
+#: the ``critical_point`` codes: 0 none, 1 a limit point, 2 a bifurcation point
+CRITICAL_CODES = {None: 0, "limit point": 1, "bifurcation": 2}
+
+
+def static_stats(rec) -> dict[str, float]:
+    """The :data:`STATIC_STATS` of a static step record (``integrators.static.StepRecord``)."""
+    count = getattr(rec, "negative_eigenvalues", None)
+    critical = getattr(rec, "critical", None)
+    return {"negative_eigenvalues": float("nan") if count is None else float(count),
+            "critical_point": float(CRITICAL_CODES[None if critical is None else critical.kind])}
+
+
 def dynamic_stats(rec) -> dict[str, float]:
     """The :data:`DYNAMIC_STATS` of a dynamic step record (``integrators.generalized_alpha.DynamicStepRecord``)."""
     out = {"refreshes": float(rec.refreshed), "kinetic_energy": float(rec.kinetic_energy),
@@ -93,6 +113,10 @@ def dynamic_stats(rec) -> dict[str, float]:
         for axis, value in zip("xyz", vec):
             out[f"{name}_{axis}"] = float(value)
     return out
+
+
+#: the nodal motion fields of a dynamic run (global components), in the HDF5 file and the XDMF series
+MOTION_FIELDS = ("velocity", "angular_velocity", "acceleration", "angular_acceleration")
 
 
 class RunRecorder:
@@ -105,6 +129,8 @@ class RunRecorder:
     rerun : path of the rerun recording (.rrd), or None
     directors : also log the directors as arrows in the recording
     warn : called with a one-line message when the recording fails and is closed (default: a warning)
+    xdmf : path of an XDMF time series for ParaView (:mod:`flexbody.outputs.xdmf`, needs meshio), or None
+    stresses : also write the stress resultants and reactions of every step to the HDF5 file
 
     Use as a context manager; pass :meth:`on_step` to ``run_scene``.
 
@@ -114,8 +140,11 @@ class RunRecorder:
     """
 
     def __init__(self, scene, h5: str | None = None, rerun: str | None = None, directors: bool = False,
-                 warn: Callable[[str], None] | None = None):
+                 warn: Callable[[str], None] | None = None, xdmf: str | None = None, stresses: bool = False):
         self.scene = scene
+        self.stresses = bool(stresses)
+        self._xdmf = None
+        self._gravity = None
         self._warn = warn or (lambda message: warnings.warn(message, RuntimeWarning, stacklevel=3))
         self.kind = getattr(scene, "kind", "static")
         self.names = [o.name for o in scene.outputs]
@@ -125,9 +154,23 @@ class RunRecorder:
         try:
             if h5:
                 from flexbody.outputs.hdf5 import DEFAULT_STATS, Hdf5Writer
-                stats = DEFAULT_STATS + DYNAMIC_STATS if self.kind == "dynamic" else DEFAULT_STATS
+                from flexbody.outputs.fields import stress_field_shapes
+                from flexbody.outputs.restart import restart_field_shapes
+                stats = DEFAULT_STATS + (DYNAMIC_STATS if self.kind == "dynamic" else STATIC_STATS)
+                n, m = mesh.n_nodes, mesh.n_elements
+                fields = restart_field_shapes(n, scene.model.n_dof, self.kind == "dynamic")
+                if self.kind == "dynamic":
+                    fields.update({name: (n, 3) for name in MOTION_FIELDS})
+                if self.stresses:
+                    fields.update(stress_field_shapes(n, m))
                 self._h5 = Hdf5Writer(h5, mesh, scene.name, scene.parameters, self.names, kind=self.kind,
-                                      stats=stats)
+                                      stats=stats, fields=fields)
+            if xdmf:
+                from flexbody.outputs.xdmf import XdmfWriter
+                self._xdmf = XdmfWriter(xdmf, mesh)
+            if xdmf or self.stresses:
+                from flexbody.outputs.fields import gravity_forces
+                self._gravity = gravity_forces(scene)
             if rerun:
                 from flexbody.outputs.rerun_log import RerunLogger
                 reference = None
@@ -142,7 +185,7 @@ class RunRecorder:
     @property
     def paths(self) -> list[str]:
         """The files being written."""
-        return [w.path for w in (self._h5, self._rrd) if w is not None]
+        return [w.path for w in (self._h5, self._rrd, self._xdmf) if w is not None]
 
     def on_step(self, rec, state, history) -> None:
         """``run_scene`` hook: write the step to every open file and flush them; the step counts as written
@@ -154,10 +197,23 @@ class RunRecorder:
             stats = record_stats(rec)
             if self.kind == "dynamic":
                 stats.update(dynamic_stats(rec))
+            else:                              # the out-of-balance force of the state written (module docstring)
+                stats.update(static_stats(rec))
+                stats["residual"] = self._residual(state, where)
+            fields = self._fields(rec, state, where)
             try:
-                self._h5.write_step(rec.step, where, state, tracked, stats)
+                self._h5.write_step(rec.step, where, state, tracked, stats, fields)
             except OSError as exc:
                 raise OutputStopped(str(exc)) from None
+        if self._xdmf is not None:
+            try:
+                from flexbody.outputs.fields import load_level, step_fields
+                point, cell = step_fields(self.scene.model, state, load_level(self.scene, where), self._gravity)
+                if self.kind == "dynamic" and rec.motion is not None:
+                    point.update({k: rec.motion[k] for k in MOTION_FIELDS if k in rec.motion})
+                self._xdmf.write_step(where, point, cell)
+            except Exception as exc:  # a ParaView file is for looking: it never stops the solve
+                self._drop_xdmf(exc)
         if self._rrd is not None:
             try:
                 self._rrd.log_step(rec.step, where, state, tracked)
@@ -165,6 +221,37 @@ class RunRecorder:
             except Exception as exc:  # a recording is for looking: it never stops the solve
                 self._drop_recording(exc)
         self.steps_written += 1
+
+    def _residual(self, state, lam: float) -> float:
+        """The work norm of the static residual r(q, lam) on the free DoFs of the state written."""
+        from integrators.newton import work_norm
+        model = self.scene.model
+        try:
+            return work_norm(model.residual(state, lam), model.dof_scale)
+        except (FloatingPointError, ValueError):
+            return float("nan")
+
+    def _fields(self, rec, state, where: float) -> dict:
+        """The HDF5 per-step fields: restart data, a dynamic run's nodal motion, the stresses on request."""
+        fields = {"restart_positions": self.scene.model.body.relative_positions(state), "restart_frames": state.frames}
+        motion = getattr(rec, "motion", None)
+        if self.kind == "dynamic" and motion is not None:
+            fields.update({"restart_v": motion["v"], "restart_vdot": motion["vdot"], "restart_a": motion["a"]})
+            fields.update({k: motion[k] for k in MOTION_FIELDS if k in motion})
+        if self.stresses:
+            from flexbody.outputs.fields import load_level, stress_field_values
+            fields.update(stress_field_values(self.scene.model, state, load_level(self.scene, where), self._gravity))
+        return fields
+
+    def _drop_xdmf(self, exc: Exception) -> None:
+        """Close the XDMF series where it stands (its steps stay readable) and say so once."""
+        writer, self._xdmf = self._xdmf, None
+        try:
+            writer.close()
+        except Exception:
+            pass
+        self._warn(f"XDMF output {writer.path!r} stopped after {self.steps_written} steps "
+                   f"({str(exc).splitlines()[0]}); the run goes on")
 
     def _drop_recording(self, exc: Exception) -> None:
         """Close the recording where it stands (its complete steps stay readable) and say so once."""
@@ -178,7 +265,7 @@ class RunRecorder:
 
     def close(self) -> None:
         """Flush and close every file (idempotent)."""
-        for writer in (self._h5, self._rrd):
+        for writer in (self._h5, self._rrd, self._xdmf):
             if writer is not None:
                 writer.close()
 

@@ -425,12 +425,13 @@ def _steps_taken(result, a: DynamicAnalysis) -> int:
 
 def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callable | None = None,
                 notify: Callable[[CompileNotice], None] | None = None,
-                started: float | None = None) -> DynamicRunSummary:
+                started: float | None = None, restart=None) -> DynamicRunSummary:
     """Integrate a dynamic scene; record outputs, energies and momenta; compare with the reference.
 
     ``on_step(record, state, history)`` is called for the initial state (record step 0, time 0) and for
     every recorded step; ``progress(record)`` for every recorded step; ``notify`` and ``started`` as in
-    :func:`flexbody.scenes.scene.run_scene`. A run that stops early (a step that does not converge) also
+    :func:`flexbody.scenes.scene.run_scene`; ``restart`` (:class:`flexbody.scenes.scene.RestartPoint`)
+    continues a saved run from its step (the history then starts there). A run that stops early (a step that does not converge) also
     records its last converged state when that is not an output step (``output_every`` > 1): the files, the
     history and the summary then all end at that instant.
     """
@@ -448,6 +449,9 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
     turn = [0.0, 0.0]                        # the largest rotation per step so far, and its time
 
     def record(rec, q, v, initial: bool = False) -> None:
+        if rec.motion is not None:               # nodal velocities and accelerations, for the output files
+            rec.motion["velocity"], rec.motion["angular_velocity"] = nodal_fields(dyn, q, rec.motion["v"])
+            rec.motion["acceleration"], rec.motion["angular_acceleration"] = nodal_fields(dyn, q, rec.motion["vdot"])
         history["time"].append(rec.time)
         rate = rotation_rate(dyn, q, v) * h
         if rate > turn[0]:
@@ -470,12 +474,29 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
         setup = time.perf_counter() - started
         compile_time = warm_up_kernels(model, notify)  # numba compilation is not run time
         t0 = time.perf_counter()
-        record(_state_record(dyn, 0, 0.0, state, v0, 0.0), state, v0, initial=True)
-        result = generalized_alpha(dyn, a.end_time, a.time_step, state=state, velocity=v0,
-                                   settings=a.alpha_settings(), on_step=record, record_every=a.output_every)
+        if restart is None:
+            vdot0 = dyn.initial_acceleration(state, 0.0, v0)
+            first = _state_record(dyn, 0, 0.0, state, v0, 0.0)
+            first.motion = {"v": v0, "vdot": vdot0, "a": vdot0}
+            record(first, state, v0, initial=True)
+            result = generalized_alpha(dyn, a.end_time, a.time_step, state=state, velocity=v0,
+                                       settings=a.alpha_settings(), on_step=record, record_every=a.output_every)
+        else:                                  # continue a saved run (flexbody.outputs.restart)
+            h = a.end_time / a.n_steps
+            if not 0 <= restart.step < a.n_steps:
+                raise ValueError(f"restart step {restart.step} is not before the last step {a.n_steps}")
+            state, v0 = restart.state, restart.v
+            first = _state_record(dyn, restart.step, restart.step * h, state, v0, 0.0, restart.dissipated_energy)
+            first.motion = {"v": v0, "vdot": restart.vdot, "a": restart.a}
+            record(first, state, v0, initial=True)
+            result = generalized_alpha(dyn, a.end_time, h, state=state, velocity=v0, settings=a.alpha_settings(),
+                                       on_step=record, record_every=a.output_every, t_start=restart.step * h,
+                                       acceleration=restart.vdot, pseudo_acceleration=restart.a,
+                                       first_step=restart.step, dissipated_energy=restart.dissipated_energy)
         if result.time > history["time"][-1]:  # stopped between two output steps: record where it stopped
             last = _state_record(dyn, _steps_taken(result, a), result.time, result.state, result.velocity,
                                  time.perf_counter() - t0, result.dissipated_energy)
+            last.motion = {"v": result.velocity, "vdot": result.acceleration, "a": result.pseudo_acceleration}
             result.records.append(last)
             record(last, result.state, result.velocity)
         wall = time.perf_counter() - t0

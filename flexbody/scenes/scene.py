@@ -140,7 +140,9 @@ class StaticAnalysis:
     """method: "load_control" (steps to the listed load factors) or "arc_length"; ``arc_options``: the
     arc-length step-length controls (``integrators.static.ARC_LENGTH_OPTIONS``: ``max_steps``,
     ``min_increment_ratio``, ``max_increment_ratio``, ``desired_iterations``) that differ from the defaults
-    of :func:`integrators.static.arc_length`."""
+    of :func:`integrators.static.arc_length`. ``stability``: count the negative eigenvalues of the tangent
+    at every converged step and report limit and bifurcation points (one symmetric factorization per step;
+    docs/stability.md)."""
 
     method: str = "load_control"
     load_factors: tuple[float, ...] = tuple(np.linspace(0.05, 1.0, 20))
@@ -148,6 +150,7 @@ class StaticAnalysis:
     max_load_increment: float | None = None
     newton: NewtonSettings = field(default_factory=NewtonSettings)
     arc_options: dict = field(default_factory=dict)
+    stability: bool = True
 
 
 @dataclass(frozen=True, eq=False)
@@ -253,6 +256,21 @@ class DynamicAnalysis:
 
 
 @dataclass
+class RestartPoint:
+    """A saved step to continue a run from (:func:`flexbody.outputs.restart.read_restart`): its step number,
+    load factor (static) or time (dynamic), the state, and for a dynamic run the free-DoF velocity v,
+    acceleration vdot and generalized-alpha pseudo-acceleration a, and the work dissipated until then."""
+
+    step: int
+    where: float
+    state: object
+    v: np.ndarray | None = None
+    vdot: np.ndarray | None = None
+    a: np.ndarray | None = None
+    dissipated_energy: float = 0.0
+
+
+@dataclass
 class Scene:
     name: str
     description: str
@@ -312,7 +330,17 @@ class RunSummary:
             "errors": self.errors, "max_rel_error": self.max_rel_error,
             **timings(self),
             "history": {k: [float(x) for x in v] for k, v in self.history.items()}, "warnings": self.warnings,
+            "stability": stability_summary(self.result),
         }
+
+
+def stability_summary(result: StaticResult) -> dict:
+    """The stability of a static path (JSON-able): the number of negative eigenvalues of the tangent at
+    every converged step (null where not counted), at the last one, and the critical points passed
+    (:class:`integrators.static.CriticalPoint`)."""
+    return {"negative_eigenvalues": [r.negative_eigenvalues for r in result.records],
+            "final_negative_eigenvalues": result.negative_eigenvalues,
+            "critical_points": [c.as_dict() for c in result.critical_points]}
 
 
 def timings(summary) -> dict[str, float]:
@@ -466,7 +494,8 @@ def compare_with_reference(history: dict[str, list[float]], reference: Reference
 
 
 def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable | None = None,
-              notify: Callable[[CompileNotice], None] | None = None, started: float | None = None):
+              notify: Callable[[CompileNotice], None] | None = None, started: float | None = None,
+              restart: RestartPoint | None = None):
     """Run a scene; track the outputs at every converged (static) or recorded (dynamic) step; compare
     with the reference.
 
@@ -482,6 +511,9 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
     notify : told when the kernels' compilation starts and ends (:func:`warm_up_kernels`)
     started : the ``time.perf_counter()`` reading when the set-up began (e.g. before building the scene);
         default: the call
+    restart : continue from a saved step (:class:`RestartPoint`): a dynamic run from its time step, a static
+        load-control path from its load factor to the levels beyond it (steps numbered on from the saved
+        one); the history starts at the saved step (dynamic) or after it (static)
 
     Returns
     -------
@@ -490,13 +522,15 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
     started = time.perf_counter() if started is None else started
     if isinstance(scene.analysis, DynamicAnalysis):
         from flexbody.scenes.dynamic_run import run_dynamic
-        return run_dynamic(scene, on_step, progress, notify, started)
+        return run_dynamic(scene, on_step, progress, notify, started, restart)
     model = scene.model
     history: dict[str, list[float]] = {"load_factor": []}
     for out in scene.outputs:
         history[out.name] = []
 
     def record(rec, state):
+        if restart is not None:
+            rec.step += restart.step
         history["load_factor"].append(rec.load_factor)
         for out in scene.outputs:
             history[out.name].append(out.value(model, state))
@@ -512,12 +546,21 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
     if a.method not in ("load_control", "arc_length"):
         raise ValueError(f"analysis method must be 'load_control' or 'arc_length', got {a.method!r}")
     with kernel_threads(None, model.body.mesh.n_elements):
-        if a.method == "load_control":
-            result = load_control(model, a.load_factors, settings=a.newton, on_step=record)
+        if restart is not None:
+            if a.method != "load_control":
+                raise ValueError("a restart continues a load-control path only (this scene uses arc length)")
+            levels = [lf for lf in a.load_factors if lf > restart.where + _level_tolerance(np.asarray(a.load_factors))]
+            if not levels:
+                raise ValueError(f"restart at load factor {restart.where:g}: no load level of the scene lies beyond it")
+            result = load_control(model, levels, settings=a.newton, on_step=record, state=restart.state,
+                                  load_factor=restart.where, check_stability=a.stability)
+        elif a.method == "load_control":
+            result = load_control(model, a.load_factors, settings=a.newton, on_step=record,
+                                  check_stability=a.stability)
         else:
             result = arc_length(model, lam_max=max(a.load_factors), initial_increment=a.arc_increment,
                                 max_load_increment=a.max_load_increment, settings=a.newton, on_step=record,
-                                **a.arc_options)
+                                check_stability=a.stability, **a.arc_options)
     wall = time.perf_counter() - t0
     errors = compare_with_reference(history, scene.reference) if scene.reference else []
     return RunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, history, errors, wall,

@@ -76,7 +76,8 @@ _VELOCITY_FIELD_KEYS = ("direction", "amplitude", "radial", "modes", "phase", "i
                         "center", "axis")
 _MATERIAL_KEYS = ("young", "poisson", "thickness", "density", "shear_correction")
 _ANALYSIS_KEYS = ("method", "steps", "max_load_factor", "load_factors", "arc_increment", "max_load_increment",
-                  "max_steps", "min_increment_ratio", "max_increment_ratio", "desired_iterations", "newton")
+                  "max_steps", "min_increment_ratio", "max_increment_ratio", "desired_iterations", "newton",
+                  "stability")
 _DYNAMIC_KEYS = ("type", "dt", "end_time", "rho_inf", "policy", "output_every", "gravity", "load_ramp_time",
                  "initial", "hub", "integrator", "damping")
 _DAMPING_KEYS = ("alpha_mass", "beta_stiffness", "ratio", "frequencies_hz")
@@ -771,6 +772,7 @@ def _build_analysis(t: _Table) -> StaticAnalysis:
     method = t.string("method", "load_control", choices=("load_control", "arc_length"))
     newton = _build_newton(t.table("newton") if t.has("newton") else None)
     lam_max = t.number("max_load_factor", 1.0, positive=True)
+    stability = t.boolean("stability", True)
     if method == "load_control":
         if t.has("load_factors") and t.has("steps"):
             raise SceneError(f"{t.where}: give analysis.steps or analysis.load_factors, not both")
@@ -784,16 +786,16 @@ def _build_analysis(t: _Table) -> StaticAnalysis:
         else:
             steps = t.integer("steps", 10, maximum=MAX_STEPS)
             lf = list(np.linspace(0.0, lam_max, steps + 1)[1:])
-        t.done(["type", "method", "steps", "max_load_factor", "load_factors", "newton"])
-        return StaticAnalysis("load_control", tuple(lf), newton=newton)
+        t.done(["type", "method", "steps", "max_load_factor", "load_factors", "newton", "stability"])
+        return StaticAnalysis("load_control", tuple(lf), newton=newton, stability=stability)
     arc = t.number("arc_increment", 0.05, positive=True)
     cap = t.number("max_load_increment", None, positive=True)
     options = {k: t.integer(k) if k in ("max_steps", "desired_iterations") else t.number(k)
                for k in ARC_LENGTH_OPTIONS if t.has(k)}
     _wrap(t.where, "analysis", check_arc_length_options, **options)
     t.done(["type", "method", "max_load_factor", "arc_increment", "max_load_increment", *ARC_LENGTH_OPTIONS,
-            "newton"])
-    return StaticAnalysis("arc_length", (lam_max,), arc, cap, newton, options)
+            "newton", "stability"])
+    return StaticAnalysis("arc_length", (lam_max,), arc, cap, newton, options, stability)
 
 
 def _build_outputs(tables: list[_Table], mesh, dynamic: bool = False) -> list:
