@@ -145,7 +145,7 @@ def connect(workers: int | None = None, scheduler: str | None = None, quiet: boo
     import dask
     with _sigint_ignored(), dask.config.set(WORKER_CONFIG):   # workers immune to Ctrl-C: this process stops them
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                               host="127.0.0.1", silence_logs=logging.ERROR,
+                               host="127.0.0.1", silence_logs=logging.CRITICAL,
                                env={"NUMBA_NUM_THREADS": str(threads)})
     client = Client(cluster)
     try:

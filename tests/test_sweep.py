@@ -192,3 +192,15 @@ def test_interrupt_keeps_the_finished_rows(client):
         assert [r.status for r in rows].count("ok") == 1
         assert [r.status for r in rows].count("cancelled") == 5
         assert exit_code(rows) == 2
+
+
+def test_exit_code_and_summary_line_of_each_status():
+    """0 only if every run is "ok"; 3 if all completed but some are not to be trusted; 2 otherwise."""
+    from flexbody.sweep import SweepRow
+    rows = lambda *statuses: [SweepRow(i, {}, s) for i, s in enumerate(statuses)]
+    assert exit_code(rows("ok", "ok")) == 0
+    assert exit_code(rows("ok", "untrusted")) == 3
+    for bad in ("not converged", "failed", "lost", "cancelled"):
+        assert exit_code(rows("ok", "untrusted", bad)) == 2
+    assert summary_line(rows("ok", "lost", "untrusted", "lost")) == \
+        "1 of 4 runs converged and trusted; 1 untrusted, 2 lost"
