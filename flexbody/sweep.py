@@ -16,7 +16,7 @@ sweep runs on a cluster: nothing here imports it).
 from __future__ import annotations
 
 import csv
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field, fields
 import itertools
 import json
 import math
@@ -97,7 +97,8 @@ class SweepRow:
 
     def as_dict(self) -> dict:
         """The row as the table has it (without the full summary and history)."""
-        d = {k: v for k, v in asdict(self).items() if k not in ("summary", "history", "reference")}
+        d = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in ("summary", "history", "reference")}
+        d.update(parameters=dict(self.parameters), outputs=dict(self.outputs), warnings=list(self.warnings))
         d.update(converged=self.converged, trusted=self.trusted)
         return d
 
