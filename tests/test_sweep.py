@@ -68,6 +68,10 @@ def test_sweep_on_cluster_equals_runs_one_by_one(client, tmp_path):
         outputs.add(round(swept.outputs["W_tip"], 9))
     assert len(outputs) == 4                           # the parameters did reach the runs
     assert exit_code(rows.values()) == 0
+    plugins = client.run(lambda dask_worker: (dask_worker.plugins["flexbody-kernels"].threads,
+                                              dask_worker.plugins["flexbody-kernels"].failure))
+    threads = max(1, (os.cpu_count() or 1) // 2)       # 2 workers share this host's cores (1 on 2 cores)
+    assert list(plugins.values()) == [(threads, None)] * 2     # both warmed up, without error
     write_table(list(rows.values()), str(tmp_path))
     with open(tmp_path / "sweep.csv") as fh:
         table = list(csv.DictReader(fh))
