@@ -538,16 +538,16 @@ def _bench_on_cluster(args, sources, plans, common: dict) -> int:
     """``flexbody bench --workers N | --scheduler ADDRESS``: the same runs as the serial bench, as the tasks
     of a sweep (:mod:`flexbody.sweep`, :mod:`flexbody.cluster`); the same report and exit code."""
     from flexbody.outputs.report import BenchRun, mesh_label, write_report
+    from dataclasses import replace
+
     from flexbody.sweep import make_tasks
     tasks, labels = [], []
     for source, meshes in zip(sources, plans):
         density = list(meshes[0]) or list(source.density)
         for mesh in meshes:
-            task = make_tasks(source.name, [mesh], common)[0]
+            task = replace(make_tasks(source.name, [mesh], common)[0], index=len(tasks))  # one numbering
             tasks.append(task)
             labels.append((source.name, mesh_label({**source.density, **task.parameters}, density)))
-    for i, task in enumerate(tasks):   # one numbering across the scenes
-        tasks[i] = type(task)(i, task.scene, task.parameters, task.swept, task.h5)
 
     def status(row) -> None:
         scene, label = labels[row.index]
@@ -580,8 +580,8 @@ def _parse_grid(items: list[str]) -> dict[str, list]:
     """``--grid nx=2,4 --grid thickness=0.01,0.02`` -> {nx: [2, 4], thickness: [0.01, 0.02]}."""
     grids: dict[str, list] = {}
     for item in items:
-        key, _, values = item.partition("=")
-        if not _ or not key.strip():
+        key, sep, values = item.partition("=")
+        if not sep or not key.strip():
             raise CliError(f"--grid expects KEY=V1,V2,..., got {item!r}")
         if key.strip() in grids:
             raise CliError(f"--grid {key.strip()} is given twice")
@@ -595,7 +595,7 @@ def _sweep_rows(tasks, args, on_row=None, warm_up=None):
     """Run sweep tasks (serially with ``--workers 0``, else on a Dask cluster: :mod:`flexbody.cluster`), with
     the progress ``[finished/total]`` on stderr. Returns (rows, None), or (rows, 130 / 143) if Ctrl-C or
     SIGTERM stopped the sweep (the unfinished runs "cancelled")."""
-    from flexbody.sweep import SweepInterrupted, run_serial
+    from flexbody.sweep import SweepInterrupted, failed_row, run_serial
     total, finished = len(tasks), []
     t0 = time.perf_counter()
 
@@ -635,7 +635,6 @@ def _sweep_rows(tasks, args, on_row=None, warm_up=None):
         return exc.rows, code
     except Stopped as exc:   # stopped while the cluster started or stopped: nothing finished is lost
         rows = list(finished)
-        from flexbody.sweep import failed_row
         done = {r.index for r in rows}
         rows += [failed_row(t, "cancelled", "stopped before it finished") for t in tasks if t.index not in done]
         return rows, 128 + exc.signum
@@ -756,8 +755,8 @@ def _cluster_arguments(parser, default: str) -> None:
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--workers", type=int, metavar="N", help=f"a local Dask cluster of N worker processes, "
                        f"0: in this process ({default})")
-    group.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask cluster: its scheduler's address (tcp://host:8786) "
-                       "or scheduler file (.json)")
+    group.add_argument("--scheduler", metavar="ADDRESS", help="an existing Dask cluster: its scheduler's "
+                       "address (tcp://host:8786) or scheduler file (.json)")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -174,8 +174,9 @@ def run_distributed(client, tasks: list[SweepTask], on_row: Callable[[SweepRow],
 
     ``warm_up``: the scene and parameters whose kernels each worker loads once (:class:`KernelWarmUp`;
     default: the first task's). A task whose worker died (Dask retries it on other workers before it gives
-    up) is a "lost" row, one that raised outside the errors :func:`run_task` reports a "failed" row. Ctrl-C / SIGTERM cancel the tasks
-    not finished and raise :class:`SweepInterrupted` with every row (the unfinished ones "cancelled").
+    up) is a "lost" row, one that raised outside the errors :func:`run_task` reports a "failed" row.
+    Ctrl-C / SIGTERM cancel the tasks not finished and raise :class:`SweepInterrupted` with every row (the
+    unfinished ones "cancelled").
     """
     if not tasks:
         return []
