@@ -647,6 +647,23 @@ def _check_workers(args) -> None:
         raise CliError(f"--workers must be >= 0 (0: in this process, no cluster), got {args.workers}")
 
 
+def _check_sweep_keys(source, keys: list[str]) -> None:
+    """An unknown key would fail every run of a sweep: one line now (the values are checked by each run)."""
+    if source.keys is not None:
+        unknown = [k for k in keys if k not in source.keys]
+        if unknown:
+            raise CliError(f"unknown parameter(s) {unknown} for scene {source.name!r}; "
+                           f"documented keys: {', '.join(source.keys)}")
+    elif source.kind == "toml":
+        from flexbody.scenes.toml_scene import SceneError, read_toml, resolve_key
+        try:
+            doc = read_toml(source.name)
+            for key in keys:
+                resolve_key(doc, key, source.name)
+        except SceneError as exc:
+            raise CliError(str(exc)) from None
+
+
 def cmd_sweep(args) -> int:
     """``flexbody sweep``: run a scene over a grid of parameters as independent tasks (a local Dask cluster,
     an existing one, or in this process with ``--workers 0``); write DIR/sweep.csv, DIR/sweep.json, the plots
@@ -662,11 +679,7 @@ def cmd_sweep(args) -> int:
     except ValueError as exc:
         raise CliError(str(exc)) from None
     source = _open(args.scene)
-    if source.keys is not None:
-        unknown = [k for k in [*fixed, *grids] if k not in source.keys]
-        if unknown:
-            raise CliError(f"unknown parameter(s) {unknown} for scene {source.name!r}; "
-                           f"documented keys: {', '.join(source.keys)}")
+    _check_sweep_keys(source, [*fixed, *grids])
     _check_outputs({"--json": args.json}, _input_files(source))
     _prepare_out_dir(args.out)
     h5_dir = os.path.join(args.out, "runs") if args.h5 else None

@@ -154,6 +154,10 @@ def test_sweep_command_checks_its_input(tmp_path, capsys):
         with pytest.raises(SystemExit) as exc:
             main(["sweep", SCENE, *extra, "--out", str(tmp_path)])
         assert message in str(exc.value)
+    toml = os.path.join(os.path.dirname(__file__), "..", "examples", "cantilever_end_shear.toml")
+    with pytest.raises(SystemExit) as exc:
+        main(["sweep", toml, "--grid", "nx=2,4", "--grid", "bogus=1", "--out", str(tmp_path)])
+    assert "unknown parameter 'bogus'" in str(exc.value)
     with pytest.raises(SystemExit):
         main(["sweep", SCENE, "--grid", "nx=2", "--workers", "2", "--scheduler", "tcp://localhost:1"])
     assert "not allowed with argument" in capsys.readouterr().err
