@@ -173,12 +173,19 @@ def test_in_process_sweep_and_a_plain_run_never_import_dask(tmp_path):
                      "--out", {str(tmp_path)!r}, "--quiet"]) == 0
         loaded = sorted(m for m in sys.modules if m.split(".")[0] in ("dask", "distributed"))
         print("LOADED", loaded)
+        sys.modules["distributed"] = None           # as without the cluster extra: one line, exit code 1
+        try:
+            main(["sweep", "{SCENE}", "--grid", "nx=2,3", "--workers", "2", "--out", {str(tmp_path)!r}])
+        except SystemExit as exc:
+            print("WITHOUT DASK", exc.code)
         sys.exit(1 if loaded else 0)
     """)
     env = {**os.environ, "NUMBA_NUM_THREADS": "1"}
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
     assert "LOADED []" in done.stdout
+    assert "WITHOUT DASK flexbody: running on a Dask cluster needs dask.distributed" in done.stdout
+    assert "pip install 'flexbody[cluster]'" in done.stdout
     assert json.loads((tmp_path / "sweep.json").read_text())["counts"] == {"ok": 2}
 
 
