@@ -219,3 +219,17 @@ def test_exit_code_and_summary_line_of_each_status():
         assert exit_code(rows("ok", "untrusted", bad)) == 2
     assert summary_line(rows("ok", "lost", "untrusted", "lost")) == \
         "1 of 4 runs converged and trusted; 1 untrusted, 2 lost"
+
+
+def test_untrusted_dynamic_run_gives_exit_code_3(client, tmp_path):
+    """A dynamic run that completes but turns 0.5 rad per step (dt = 0.05 s at 10 rad/s) and drifts is
+    "untrusted", with its reasons in the table; the sweep exits with 3."""
+    out = tmp_path / "out"
+    code = main(["sweep", "spinning_plate", "--grid", "dt=0.01,0.05", "--set", "nx=2", "--set", "ny=2",
+                 "--set", "end_time=0.2", "--scheduler", client.scheduler.address, "--out", str(out), "--quiet"])
+    assert code == 3
+    with open(out / "sweep.csv") as fh:
+        table = list(csv.DictReader(fh))
+    assert [(r["status"], r["converged"], r["trusted"]) for r in table] == [("ok", "True", "True"),
+                                                                          ("untrusted", "True", "False")]
+    assert "turns by 0.5 rad in a time step" in table[1]["message"]
