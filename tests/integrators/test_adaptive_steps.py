@@ -73,6 +73,9 @@ def test_records_land_on_the_output_times_and_count_every_step():
     assert sum(r.rejected_error for r in out.records) == out.rejected_error
     assert all(0 < r.h <= 0.5 and r.error_estimate <= 1.0 for r in out.records)
     assert out.min_step < out.max_step <= 0.5
+    fixed = generalized_alpha(Oscillator([1.0]), 1.0, 0.25, state=np.array([1.0]))   # the fixed step's records
+    assert [r.h for r in fixed.records] == [0.25] * 4 and fixed.steps == 4 and not fixed.adaptive
+    assert fixed.rejected_error == fixed.rejected_newton == 0 and fixed.min_step == fixed.max_step == 0.25
 
 
 def scaled_cantilever(s: float):
