@@ -77,7 +77,9 @@ multiple of h_j after t_start and ends at or before the next output time (``reco
 exactly on the output times and on t_end, and every rung keeps its own integrator with its iteration matrix
 and factorization (S depends on h through beta' and gamma'; a matrix made for one h is never used for
 another), so that changing the step size does not refactorize by itself. A change of step size moves the
-pseudo-acceleration to the new shift, a_n += (alpha_m - alpha_f)(h/h_prev - 1)(a_n - a_{n-1}).
+pseudo-acceleration to the new shift, a_n += (alpha_m - alpha_f)(h/h_prev - 1)(a_n - a_{n-1}): the local
+error is the same either way to leading order, but the estimate of the first step after the change is exact
+only with it (tests/integrators/test_adaptive_steps.py).
 """
 
 from __future__ import annotations

@@ -155,6 +155,9 @@ def test_adaptive_steps_in_a_scene_file_land_on_the_output_times(tmp_path):
     # the fixed step: the same file without the key (and ``--set adaptive=false``)
     assert not load_toml_scene(write(tmp_path, text), {"adaptive": False}).analysis.is_adaptive
     assert not load_toml_scene(write(tmp_path, PLATE)).analysis.is_adaptive
+    # the built-in dynamic scenes take it too (``flexbody run spinning_plate --set adaptive=true``)
+    assert build("spinning_plate", nx=1, ny=1, adaptive=True).analysis.is_adaptive
+    assert not build("spinning_plate", nx=1, ny=1).analysis.is_adaptive
 
 
 # -- fuzz: a mutated dynamic scene document builds or fails with one SceneError line ---------------------
