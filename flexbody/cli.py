@@ -254,6 +254,10 @@ def summary_lines(summary) -> list[str]:
     if dynamic:
         reached = (f"time reached {d['time']:.4g} s of {d['end_time']:.4g} s, dt {d['time_step']:.4g} s, "
                    f"rho_inf {d['rho_inf']:g}, {d['policy']} iteration matrix")
+        ts = d.get("time_steps", {})
+        if ts.get("adaptive"):
+            reached += (f"; adaptive: {ts['accepted']} accepted, rejected {ts['rejected_error']} (error) + "
+                        f"{ts['rejected_newton']} (Newton), dt {ts['min']:.3g} to {ts['max']:.3g} s")
     else:
         reached = f"load factor reached {d['load_factor']:.4g}"
     lines = [

@@ -50,6 +50,36 @@ With ``rotate_matrix`` an old factorization is applied through P from the config
 (``dyn.transfer``: a Kabsch fit of the positions and the frames' drilling drift; exact for rigid motion of
 a free body, tests/shell/test_inertia.py), which keeps it useful over arbitrarily large rotations: the
 tumbling plate of the tests runs 600 steps on one factorization.
+
+Adaptive time steps (``AlphaSettings.adaptive``). Local error estimate: with the second-order condition
+gamma = 1/2 + alpha_f - alpha_m the pseudo-acceleration approximates vdot at a shifted time,
+a_n = vdot(t_n + (alpha_m - alpha_f) h) + O(h^2) (Arnold & Bruls 2007, "Convergence of the generalized-alpha
+scheme for constrained mechanical systems", Multibody Syst. Dyn. 18), so a_{n+1} - a_n = h q''' + O(h^2), and
+the Taylor expansion of the position update leaves the local error
+
+    x_{n+1} - x(t_{n+1}) = h^3 (beta - gamma/2 + 1/12) q''' + O(h^4) ~ h^2 (beta - gamma/2 + 1/12)(a_{n+1} - a_n)
+
+in the Lie algebra (x = h dq_n, the increment of the step: the estimate is a vector of increments on the
+group). For a Newmark scheme (gamma = 1/2) it is the classical h^2 (beta - 1/6)(a_{n+1} - a_n) (Zienkiewicz &
+Xie 1991, "A simple error estimator and adaptive time stepping procedure for dynamic analysis", Earthquake
+Eng. Struct. Dyn. 20; for Newmark-type schemes also in Geradin & Cardona, "Flexible Multibody Dynamics",
+2001); the extra (1/2 - gamma)/2 is the generalized-alpha's shift of a (at rho_inf = 0 the Newmark constant
+would overestimate the error 2.5 times; the estimate over the true local error of a linear oscillator tends
+to 1, tests/integrators/test_adaptive_steps.py). (Cited by content, as above.) Its size is the weighted RMS
+norm sqrt(mean((e_i / (tol s_i))^2)) with s_i the DoF scales of the convergence test (model size, 1 rad):
+scale-free, and independent of where the body is. A step is accepted when it is <= 1; the next step is
+h * safety * err^(-1/3) (an I controller for a local error of order 3), at most 2 h, and not more than h
+right after a rejection; a rejected step is retried with at most h/2 (at least h/10), and a step whose
+Newton iteration fails (after the retries of ``GeneralizedAlpha.step``) with h/2.
+
+Step sizes lie on the dyadic ladder H / 2^j (H the given step, j of either sign); a step h_j starts only at a
+multiple of h_j after t_start and ends at or before the next output time (``record_every`` H): the steps land
+exactly on the output times and on t_end, and every rung keeps its own integrator with its iteration matrix
+and factorization (S depends on h through beta' and gamma'; a matrix made for one h is never used for
+another), so that changing the step size does not refactorize by itself. A change of step size moves the
+pseudo-acceleration to the new shift, a_n += (alpha_m - alpha_f)(h/h_prev - 1)(a_n - a_{n-1}): the local
+error is the same either way to leading order, but the estimate of the first step after the change is exact
+only with it (tests/integrators/test_adaptive_steps.py).
 """
 
 from __future__ import annotations
@@ -96,6 +126,12 @@ class AlphaParameters:
     def gamma_prime(self, h: float) -> float:
         return self.gamma / (h * self.beta)
 
+    @property
+    def error_constant(self) -> float:
+        """c in the local position error c h^3 q''' of a step: beta - gamma/2 + 1/12 (module docstring, "Adaptive
+        time steps"); 1/12 for the trapezoidal rule, beta - 1/6 for every Newmark scheme (gamma = 1/2)."""
+        return self.beta - 0.5 * self.gamma + 1.0 / 12.0
+
 
 @dataclass
 class AlphaSettings:
@@ -108,6 +144,12 @@ class AlphaSettings:
     rotate_matrix: bool = True    # carry an old matrix along the body's rigid rotation (see above)
     divergence_factor: float = 1e6  # a step fails when a correction exceeds this multiple of the first one
     max_cutbacks: int = 0         # a failed step is retried as two half steps, down to h / 2^max_cutbacks
+    # error-controlled time steps (module docstring, "Adaptive time steps"); the fixed step when False
+    adaptive: bool = False
+    error_tolerance: float = 1e-5  # local position error per step, weighted RMS, as a fraction of the DoF scale
+    min_step: float | None = None  # the run fails below it (default: the first step / 2^20)
+    max_step: float | None = None  # default: the output interval (the step times ``record_every``)
+    safety: float = 0.8           # the step chosen is at most safety * the step the estimate asks for
 
     def __post_init__(self) -> None:
         if self.policy not in ("full", "modified"):
@@ -120,6 +162,19 @@ class AlphaSettings:
             raise ValueError(f"max_iterations must be >= 1, got {self.max_iterations!r}")
         if self.max_cutbacks < 0:
             raise ValueError(f"max_cutbacks must be >= 0, got {self.max_cutbacks!r}")
+        if not isinstance(self.adaptive, bool):
+            raise ValueError(f"adaptive must be true or false, got {self.adaptive!r}")
+        if not 0 < self.error_tolerance < 1:
+            raise ValueError(f"error_tolerance must lie in (0, 1) (a fraction of the model size), got "
+                             f"{self.error_tolerance!r}")
+        for name in ("min_step", "max_step"):
+            value = getattr(self, name)
+            if value is not None and (isinstance(value, bool) or not np.isfinite(value) or not value > 0):
+                raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
+        if self.min_step is not None and self.max_step is not None and self.min_step > self.max_step:
+            raise ValueError(f"min_step must not exceed max_step, got {self.min_step!r} > {self.max_step!r}")
+        if not 0 < self.safety <= 1:
+            raise ValueError(f"safety must lie in (0, 1], got {self.safety!r}")
 
 
 @dataclass
@@ -142,6 +197,10 @@ class DynamicStepRecord:
     dissipated_energy: float = 0.0    # D(t), the work of the damping forces since the start
     #: the step's end values on the free DoFs {"v", "vdot", "a"}: set for the records given to ``on_step``
     motion: dict | None = None
+    h: float = 0.0                    # the size of the last step taken (of the last sub-step after cut-backs)
+    rejected_error: int = 0           # steps rejected by the error estimate since the previous record
+    rejected_newton: int = 0          # steps whose Newton iteration failed since the previous record
+    error_estimate: float = float("nan")  # the last step's weighted local error estimate (adaptive; <= 1)
 
     @property
     def total_energy(self) -> float:
@@ -168,6 +227,12 @@ class DynamicResult:
     message: str = "completed"
     wall_time: float = 0.0
     dissipated_energy: float = 0.0    # D at ``time``
+    steps: int = 0                    # accepted steps (sub-steps after cut-backs counted)
+    rejected_error: int = 0           # steps rejected by the error estimate (adaptive)
+    rejected_newton: int = 0          # steps whose Newton iteration failed (retried smaller)
+    min_step: float = float("nan")    # the smallest and largest accepted step
+    max_step: float = float("nan")
+    adaptive: bool = False
 
 
 @dataclass
@@ -363,10 +428,11 @@ class _Stepper:
         return self._levels[level]
 
     def advance(self, q, v, vdot, a, t: float, level: int = 0):
-        """(q, v, vdot, a, iterations, residuals, corrections, refreshes, substeps) after a step of h / 2^level."""
+        """(q, v, vdot, a, iterations, residuals, corrections, refreshes, substeps, failures, h of the last
+        sub-step) after a step of h / 2^level."""
         try:
             st, its, res, cor, ref = self._integrator(level).step(q, v, vdot, a, t)
-            return st.state, st.v, st.vdot, st.a, its, res, cor, ref, 1
+            return st.state, st.v, st.vdot, st.a, its, res, cor, ref, 1, 0, self.h / 2**level
         except _StepFailure:
             if level >= self.settings.max_cutbacks:
                 raise
@@ -374,7 +440,151 @@ class _Stepper:
         first = self.advance(q, v, vdot, a, t, level + 1)
         second = self.advance(*first[:4], t + half, level + 1)
         return (*second[:4], first[4] + second[4], first[5] + second[5], first[6] + second[6],
-                first[7] + second[7], first[8] + second[8])
+                first[7] + second[7], first[8] + second[8], first[9] + second[9] + 1, second[10])
+
+
+# -- error-controlled time steps ------------------------------------------------------------------------------
+def shifted_pseudo_acceleration(a_n: np.ndarray, a_prev: np.ndarray | None, h_prev: float, h: float,
+                                p: AlphaParameters) -> np.ndarray:
+    """The pseudo-acceleration a_n for a step of h after steps of h_prev (module docstring, "Adaptive time steps").
+
+    a_n approximates vdot at t_n + (alpha_m - alpha_f) h_prev; moved to t_n + (alpha_m - alpha_f) h with the
+    rate (a_n - a_{n-1}) / h_prev of the last step. Unchanged at the first step (a_prev None) or for h = h_prev.
+    """
+    if a_prev is None or h == h_prev:
+        return a_n
+    return a_n + (p.alpha_m - p.alpha_f) * (h / h_prev - 1.0) * (a_n - a_prev)
+
+
+def local_error_estimate(a_new: np.ndarray, a_n: np.ndarray, h: float, p: AlphaParameters) -> np.ndarray:
+    """The local position error of a step in the Lie algebra, h^2 (beta - gamma/2 + 1/12) (a_{n+1} - a_n)."""
+    return (h * h * p.error_constant) * (a_new - a_n)
+
+
+def error_norm(e: np.ndarray, scale, settings: AlphaSettings) -> float:
+    """sqrt(mean((e_i / (tol s_i))^2)) with s_i the DoF scale (model size, 1 rad): <= 1 accepts the step."""
+    return float(np.sqrt(np.mean((e / (settings.error_tolerance * scale)) ** 2))) if e.size else 0.0
+
+
+class _AdaptiveStepper:
+    """Steps on the dyadic ladder h_j = H / 2^j (H the base step, j of either sign), each taken from a time that is
+    a multiple of h_j after t_start and ending at or before the next output time, so that the steps land
+    exactly on the output times and on t_end. One integrator (iteration matrix, factorization) per rung, as
+    the cut-backs of :class:`_Stepper` keep them: a change of step size never refactorizes by itself.
+
+    Times are counted in ticks of the finest rung, H / 2^j_max (integers: no round-off in the landing).
+    """
+
+    def __init__(self, dyn, base: float, n_base: int, record_every: int, settings: AlphaSettings) -> None:
+        self.dyn, self.base, self.settings = dyn, base, settings
+        self.params = AlphaParameters.from_rho_inf(settings.rho_inf)
+        self.stats = NewtonStats()
+        self._levels: dict[int, GeneralizedAlpha] = {}
+        h_min = settings.min_step if settings.min_step is not None else base / 2**20
+        h_max = record_every * base if settings.max_step is None else min(settings.max_step, record_every * base)
+        self.j_max = max(0, int(np.floor(np.log2(base / h_min) + 1e-9)))
+        self.j_min = int(np.ceil(np.log2(base / h_max) - 1e-9))
+        if self.j_min > self.j_max:
+            raise ValueError(f"max_step {h_max!r} is below min_step {h_min!r}")
+        self.end = n_base * 2**self.j_max                     # t_end in ticks
+        self.out = record_every * 2**self.j_max               # the output interval in ticks
+
+    def integrator(self, j: int) -> GeneralizedAlpha:
+        if j not in self._levels:
+            self._levels[j] = GeneralizedAlpha(self.dyn, self.h(j), self.settings, self.stats)
+        return self._levels[j]
+
+    def h(self, j: int) -> float:
+        return self.base / 2.0**j
+
+    def ticks(self, j: int) -> int:
+        return 2 ** (self.j_max - j)
+
+    def next_output(self, pos: int) -> int:
+        return min((pos // self.out + 1) * self.out, self.end)
+
+    def rung(self, pos: int, wanted: float) -> int:
+        """The longest step h_j <= wanted allowed at ``pos``: aligned, not past the next output time; j_max + 1
+        if even the finest rung is too long for ``wanted``."""
+        j = max(self.j_min, int(np.ceil(np.log2(self.base / wanted) - 1e-12)))
+        stop = self.next_output(pos)
+        while j <= self.j_max and (pos % self.ticks(j) or pos + self.ticks(j) > stop):
+            j += 1
+        return j
+
+
+def _adaptive_run(dyn, stepper: _AdaptiveStepper, t_start: float, t_end: float, q, v, vdot, a, on_step,
+                  t0: float, initial: DynamicStepRecord, first_step: int = 0,
+                  dissipated: float = 0.0) -> DynamicResult:
+    """The loop of :func:`generalized_alpha` with error-controlled steps (module docstring); ``first_step``
+    and ``dissipated``: the step count and the dissipated work D at t_start (a restart)."""
+    s, p = stepper.settings, stepper.params
+    f_damp = _damping_force(dyn, q, v)
+    records: list[DynamicStepRecord] = []
+    pos, accepted, rej_err, rej_newton = 0, 0, 0, 0     # totals
+    since = [0, 0, 0]                                    # accepted, rejected (error, Newton) since the last record
+    wanted, grow = stepper.h(max(stepper.j_min, 0)), True
+    a_prev, h_prev, h_taken = None, 0.0, []
+    t, last = t_start, 0
+
+    def result(converged: bool, message: str) -> DynamicResult:
+        return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, converged, message,
+                             time.perf_counter() - t0, dissipated, accepted, rej_err, rej_newton,
+                             min(h_taken, default=float("nan")), max(h_taken, default=float("nan")), True)
+
+    try:
+        while pos < stepper.end:
+            j = stepper.rung(pos, wanted)
+            if j > stepper.j_max:
+                return result(False, f"step {accepted + 1} from t = {t:.6g} failed: the step size needed is below "
+                                     f"min_step {stepper.h(stepper.j_max):.3g} s ({rej_err} steps rejected by the "
+                                     f"error estimate, {rej_newton} by Newton failures)")
+            h = stepper.h(j)
+            a_n = shifted_pseudo_acceleration(a, a_prev, h_prev, h, p)
+            try:
+                st, its, res, cor, ref = stepper.integrator(j).step(q, v, vdot, a_n, t)
+            except _StepFailure as exc:
+                rej_newton, since[2] = rej_newton + 1, since[2] + 1
+                if j >= stepper.j_max:
+                    return result(False, f"step {accepted + 1} from t = {t:.6g} failed at the smallest step "
+                                         f"{h:.3g} s: {exc}")
+                wanted, grow = 0.5 * h, False
+                continue
+            err = error_norm(local_error_estimate(st.a, a_n, h, p), dyn.dof_scale, s)
+            factor = s.safety * err ** (-1.0 / 3.0) if err > 0 else np.inf
+            if not np.isfinite(err) or err > 1.0:
+                rej_err, since[1] = rej_err + 1, since[1] + 1
+                wanted, grow = h * min(0.5, max(0.1, factor if np.isfinite(err) else 0.1)), False
+                continue
+            # accepted: q_{n+1}, v_{n+1}, vdot_{n+1}, a_{n+1}
+            v_old = v
+            q, v, vdot, a_prev, a = st.state, st.v, st.vdot, a_n, st.a
+            h_prev = h
+            h_taken.append(h)
+            pos += stepper.ticks(j)
+            t = t_end if pos == stepper.end else t_start + pos / 2**stepper.j_max * stepper.base
+            accepted += 1
+            since[0] += 1
+            wanted = h * min(2.0 if grow else 1.0, factor)
+            grow = True
+            f_new = _damping_force(dyn, q, v)
+            dissipated += 0.25 * h * float((v_old + v) @ (f_damp + f_new))
+            f_damp = f_new
+            if pos % stepper.out == 0 or pos == stepper.end:
+                rec = _record(dyn, first_step + accepted, t, q, v, its, res, cor, ref, since[0], t0, dissipated)
+                rec.motion = {"v": v, "vdot": vdot, "a": a}
+                rec.h, rec.rejected_error, rec.rejected_newton, rec.error_estimate = h, since[1], since[2], err
+                records.append(rec)
+                since, last = [0, 0, 0], accepted
+                if on_step is not None:
+                    on_step(rec, q, v)
+    except KeyboardInterrupt:
+        if on_step is not None and accepted > last:
+            rec = _record(dyn, first_step + accepted, t, q, v, 0, [], [], 0, 1, t0, dissipated)
+            rec.motion = {"v": v, "vdot": vdot, "a": a}
+            on_step(rec, q, v)
+        raise
+    return result(True, "completed")
 
 
 def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.ndarray | None = None,
@@ -382,30 +592,39 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
                       on_step: Callable | None = None, record_every: int = 1,
                       acceleration: np.ndarray | None = None, pseudo_acceleration: np.ndarray | None = None,
                       first_step: int = 0, dissipated_energy: float = 0.0) -> DynamicResult:
-    """Integrate from t_start to t_end with a fixed step: h, rounded down so that whole steps end at t_end.
+    """Integrate from t_start to t_end with a fixed step (h, rounded down so that whole steps end at t_end) or,
+    with ``settings.adaptive``, error-controlled steps.
 
     Parameters
     ----------
     dyn : the dynamic model (:class:`flexbody.dynamics.DynamicModel`)
+    h : the time step; adaptive: the base step H, the first step and the output interval's unit (rounded
+        down as the fixed step is)
     state, velocity : initial configuration (default: the reference) and free-DoF velocity (default: 0)
     on_step : called as on_step(record, state, v) after every recorded step, and for the last converged
         step when a ``KeyboardInterrupt`` stops the run between two recorded steps (then re-raised)
-    record_every : keep every k-th step record (energy and momenta are evaluated only for kept steps)
+    record_every : keep every k-th step record (energy and momenta are evaluated only for kept steps);
+        adaptive: a record at every multiple of k H after t_start (the same times as the fixed step's records),
+        on which the steps land; no step is longer than k H (nor than ``settings.max_step``)
     acceleration, pseudo_acceleration, first_step, dissipated_energy : a continuation (restart) of a run at
         its step ``first_step``: vdot and a there (default: consistent, a = vdot), the step numbers and the
         record_every grid counted on from it, and the work D dissipated until then
 
     The initial acceleration is consistent (vdot_0 = -M^-1 g(q_0, t_0), a_0 = vdot_0), which the second
-    order of the method requires (BCA; Arnold & Bruls 2007). A step that does not converge is retried as two half
-    steps, down to ``settings.max_cutbacks`` levels (default 0: fixed step); if it still fails, the run ends
-    with a message and the last converged state, never with garbage. A step's record then sums the
-    sub-steps' iterations and histories (``substeps`` > 1).
+    order of the method requires (BCA; Arnold & Bruls 2007). Fixed step: a step that does not converge is
+    retried as two half steps, down to ``settings.max_cutbacks`` levels (default 0); a step's record then
+    sums the sub-steps' iterations and histories (``substeps`` > 1, ``rejected_newton`` the failed tries).
+    Adaptive: steps H / 2^j chosen by the local error estimate (module docstring); a record sums the steps
+    since the previous one (``substeps`` accepted, ``rejected_error``, ``rejected_newton``; ``h`` the last).
+    If a step still fails, the run ends with a message and the last converged state, never with garbage.
     """
     if not (np.isfinite(t_end) and t_end > t_start):
         raise ValueError(f"t_end must be finite and > t_start, got {t_end!r}")
+    if isinstance(record_every, bool) or not isinstance(record_every, (int, np.integer)) or record_every < 1:
+        raise ValueError(f"record_every must be an integer >= 1, got {record_every!r}")
+    settings = settings or AlphaSettings()
     n_steps = max(1, int(np.ceil((t_end - t_start) / h - 1e-9)))
     h = (t_end - t_start) / n_steps
-    stepper = _Stepper(dyn, h, settings or AlphaSettings())
     q = dyn.model.initial_state() if state is None else state
     if hasattr(dyn, "prescribe"):
         q = dyn.prescribe(q, t_start)
@@ -414,25 +633,37 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
     a = vdot.copy() if pseudo_acceleration is None else np.asarray(pseudo_acceleration, float).copy()
     t0 = time.perf_counter()
     initial = _record(dyn, first_step, t_start, q, v, 0, [], [], 0, 1, t0, dissipated_energy)
+    if settings.adaptive:
+        stepper = _AdaptiveStepper(dyn, h, n_steps, int(record_every), settings)
+        return _adaptive_run(dyn, stepper, t_start, t_end, q, v, vdot, a, on_step, t0, initial,
+                             first_step, float(dissipated_energy))
+    stepper = _Stepper(dyn, h, settings)
     f_damp, dissipated = _damping_force(dyn, q, v), float(dissipated_energy)  # f_d, D = int v . f_d dt
     records: list[DynamicStepRecord] = []
+    substeps, failures, failed_since = 0, 0, 0
     t, done, last = t_start, 0, 0  # (q, v) after `done` steps at t; `last`: the last step given to on_step
+
+    def result(converged: bool, message: str) -> DynamicResult:
+        return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, converged, message,
+                             time.perf_counter() - t0, dissipated, substeps, 0, failures,
+                             h / 2 ** max(stepper._levels, default=0), h, False)
+
     try:
         for n in range(n_steps):
             try:
                 v_old = v
-                q, v, vdot, a, its, res, cor, ref, sub = stepper.advance(q, v, vdot, a, t)
+                q, v, vdot, a, its, res, cor, ref, sub, fails, h_last = stepper.advance(q, v, vdot, a, t)
             except _StepFailure as exc:
-                return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, False,
-                                     f"step {n + 1} from t = {t:.6g} failed: {exc}", time.perf_counter() - t0,
-                                     dissipated)
+                return result(False, f"step {n + 1} from t = {t:.6g} failed: {exc}")
             t, done = t_start + (n + 1) * h, n + 1  # no call since advance(): an interrupt cannot fall between
+            substeps, failures, failed_since = substeps + sub, failures + fails, failed_since + fails
             f_new = _damping_force(dyn, q, v)
             dissipated += 0.25 * h * float((v_old + v) @ (f_damp + f_new))
             f_damp = f_new
             if (first_step + n + 1) % record_every == 0 or n + 1 == n_steps:
                 rec = _record(dyn, first_step + n + 1, t, q, v, its, res, cor, ref, sub, t0, dissipated)
                 rec.motion = {"v": v, "vdot": vdot, "a": a}
+                rec.h, rec.rejected_newton, failed_since = h_last, failed_since, 0
                 records.append(rec)
                 last = n + 1
                 if on_step is not None:
@@ -443,5 +674,4 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
             rec.motion = {"v": v, "vdot": vdot, "a": a}
             on_step(rec, q, v)
         raise
-    return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, True, "completed",
-                         time.perf_counter() - t0, dissipated)
+    return result(True, "completed")

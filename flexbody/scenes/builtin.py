@@ -4,7 +4,7 @@ Each builder takes the mesh density and the physical parameters as keyword argum
 ``--set``) can refine the mesh or change the thickness without touching the package. The dynamic scenes
 (``spinning_plate``, ``spinning_membrane``, ``spinning_sail``, ``tumbling_plate``, ``swinging_strip``, listed
 in ``DYNAMIC``) also take the time step ``dt``, the end time ``end_time``, ``rho_inf``, the iteration-matrix
-``policy`` and ``output_every``.
+``policy``, ``output_every`` and ``adaptive`` (error-controlled time steps, docs/dynamics.md).
 """
 
 from __future__ import annotations
@@ -164,7 +164,7 @@ def _spin_velocities(nodes: np.ndarray, omega, center) -> dict:
 
 def spinning_plate(nx: int = 4, ny: int = 4, thickness: float = 0.01, omega: float = 10.0, dt: float = 2e-3,
                    end_time: float = 1.0, rho_inf: float = 0.9, policy: str = "modified",
-                   output_every: int = 1) -> Scene:
+                   output_every: int = 1, adaptive: bool = False) -> Scene:
     """Free 1 x 1 m plate (E=1e6, nu=0.3, rho=1000) spinning at 10 rad/s about its normal for 1 s.
 
     Starts unstressed with the rigid spin field about its centre, so it breathes about its centrifugal
@@ -178,12 +178,12 @@ def spinning_plate(nx: int = 4, ny: int = 4, thickness: float = 0.01, omega: flo
     c = np.array([L / 2, L / 2, 0.0])
     outs = [RadialDisplacement("u_r_corner", (mesh.nearest_node([L, L, 0.0]),), tuple(c)),
             RadialDisplacement("u_r_edge", (mesh.nearest_node([L, L / 2, 0.0]),), tuple(c))]
-    analysis = DynamicAnalysis(dt, end_time, rho_inf, policy, output_every,
+    analysis = DynamicAnalysis(dt, end_time, rho_inf, policy, output_every, adaptive=adaptive,
                                **_spin_velocities(mesh.nodes, [0.0, 0.0, omega], c))
     return Scene("spinning_plate", "free 1 x 1 m plate spinning at 10 rad/s about its normal for 1 s",
                  model, analysis, outs, None,
                  dict(nx=nx, ny=ny, thickness=thickness, omega=omega, dt=dt, end_time=end_time, rho_inf=rho_inf,
-                      policy=policy, output_every=output_every))
+                      policy=policy, output_every=output_every, adaptive=adaptive))
 
 
 def rotating_annulus_displacement(r, omega: float, a: float, b: float, E: float, nu: float, rho: float,
@@ -210,7 +210,7 @@ def rotating_annulus_displacement(r, omega: float, a: float, b: float, E: float,
 def spinning_membrane(n_radial: int = 2, n_circ: int = 32, inner_radius: float = 0.5, outer_radius: float = 1.0,
                       thickness: float = 0.01, young: float = 1e9, omega: float = 20.0, drive: str = "hub",
                       ramp_time: float = 0.05, dt: float = 1e-3, end_time: float = 0.15, rho_inf: float = 0.0,
-                      policy: str = "modified", output_every: int = 1) -> Scene:
+                      policy: str = "modified", output_every: int = 1, adaptive: bool = False) -> Scene:
     """Annular membrane (0.5-1 m) spun up by its hub to 20 rad/s vs the rotating-disk stretch (analytic).
 
     drive = "hub": the inner edge clamped to a hub spun up smoothly from rest to omega in ``ramp_time``
@@ -247,7 +247,7 @@ def spinning_membrane(n_radial: int = 2, n_circ: int = 32, inner_radius: float =
         kwargs = dict(prescribed=(PrescribedMotion(inner, hub_spin_up([0.0, 0.0, omega], ramp_time)),))
         steady = ramp_time
     outs = [RadialDisplacement(f"u_r_{name}", tuple(int(i) for i in nodes)) for name, nodes, _ in rings]
-    analysis = DynamicAnalysis(dt, end_time, rho_inf, policy, output_every, **kwargs)
+    analysis = DynamicAnalysis(dt, end_time, rho_inf, policy, output_every, adaptive=adaptive, **kwargs)
     t_ref = np.linspace(steady + (end_time - steady) / 2, end_time, 6)
     values = {f"u_r_{name}": np.full(t_ref.size, float(rotating_annulus_displacement(r, omega, a, b, young, nu, rho,
                                                                                      drive)))
@@ -257,7 +257,7 @@ def spinning_membrane(n_radial: int = 2, n_circ: int = 32, inner_radius: float =
                  model, analysis, outs, ref,
                  dict(n_radial=n_radial, n_circ=n_circ, inner_radius=a, outer_radius=b, thickness=thickness,
                       young=young, omega=omega, drive=drive, ramp_time=ramp_time, dt=dt, end_time=end_time,
-                      rho_inf=rho_inf, policy=policy, output_every=output_every))
+                      rho_inf=rho_inf, policy=policy, output_every=output_every, adaptive=adaptive))
 
 
 def _polygon_norm(points: np.ndarray, n_sides: int, radius: float) -> np.ndarray:
@@ -269,7 +269,8 @@ def _polygon_norm(points: np.ndarray, n_sides: int, radius: float) -> np.ndarray
 
 def spinning_sail(n_rings: int = 4, radius: float = 1.0, thickness: float = 0.01, young: float = 1e9,
                   omega: float = 20.0, ramp_time: float = 0.05, dt: float = 1e-3, end_time: float = 0.15,
-                  rho_inf: float = 0.0, policy: str = "modified", output_every: int = 1) -> Scene:
+                  rho_inf: float = 0.0, policy: str = "modified", output_every: int = 1,
+                  adaptive: bool = False) -> Scene:
     """Hexagonal membrane (solar sail, circumradius 1 m) spun up by a central hub to 20 rad/s; no reference.
 
     The hub is the innermost ring of elements (the hexagon of circumradius radius / n_rings, clamped and
@@ -289,11 +290,11 @@ def spinning_sail(n_rings: int = 4, radius: float = 1.0, thickness: float = 0.01
     edge_mid = radius * math.cos(math.pi / 6) * np.array([math.cos(math.pi / 6), math.sin(math.pi / 6), 0.0])
     outs = [RadialDisplacement("u_r_corner", (mesh.nearest_node([radius, 0.0, 0.0]),)),
             RadialDisplacement("u_r_edge", (mesh.nearest_node(edge_mid),))]
-    analysis = DynamicAnalysis(dt, end_time, rho_inf, policy, output_every, prescribed=(motion,))
+    analysis = DynamicAnalysis(dt, end_time, rho_inf, policy, output_every, prescribed=(motion,), adaptive=adaptive)
     return Scene("spinning_sail", "hexagonal membrane (solar sail) spun up by its hub to 20 rad/s", model, analysis,
                  outs, None, dict(n_rings=n_rings, radius=radius, thickness=thickness, young=young, omega=omega,
                                   ramp_time=ramp_time, dt=dt, end_time=end_time, rho_inf=rho_inf, policy=policy,
-                                  output_every=output_every))
+                                  output_every=output_every, adaptive=adaptive))
 
 
 CANTILEVER_ROOTS = (1.8751040687119611, 4.6940911329741745, 7.8547574382376126, 10.995540734875467,
@@ -329,7 +330,7 @@ def cantilever_gravity_release(x: np.ndarray | float, t: np.ndarray, length: flo
 
 def swinging_strip(nx: int = 16, ny: int = 1, thickness: float = 0.01, young: float = 2.1e11, dt: float = 1.2e-3,
                    end_time: float = 0.12, rho_inf: float = 0.9, policy: str = "modified", output_every: int = 1,
-                   max_cutbacks: int = 4, tying: bool | str = True) -> Scene:
+                   max_cutbacks: int = 4, tying: bool | str = True, adaptive: bool = False) -> Scene:
     """Steel strip (1 x 0.1 x 0.01 m) clamped at one end, released under gravity vs the beam's modal solution.
 
     Starts straight and at rest; gravity (-9.81 m/s^2 along z, the strip's normal) sets it swinging about its
@@ -346,7 +347,7 @@ def swinging_strip(nx: int = 16, ny: int = 1, thickness: float = 0.01, young: fl
                   [Fix(mesh.node_set("clamped"), "all")])
     tip = mesh.nearest_node([L, b / 2, 0.0])
     analysis = DynamicAnalysis(dt, end_time, rho_inf, policy, output_every, gravity=(0.0, 0.0, -g),
-                               settings=AlphaSettings(max_cutbacks=max_cutbacks))
+                               settings=AlphaSettings(max_cutbacks=max_cutbacks), adaptive=adaptive)
     outs = [Output("w_tip", tip, (0.0, 0.0, 1.0)), Output("minus_u_tip", tip, (-1.0, 0.0, 0.0))]
     static_tip = 1.5 * rho * g * L**4 / (young * thickness**2)          # q L^4 / (8 E I)
     ref = None
@@ -357,7 +358,8 @@ def swinging_strip(nx: int = 16, ny: int = 1, thickness: float = 0.01, young: fl
     return Scene("swinging_strip", "steel strip clamped at one end, released under gravity vs the beam modes",
                  model, analysis, outs, ref,
                  dict(nx=nx, ny=ny, thickness=thickness, young=young, dt=dt, end_time=end_time, rho_inf=rho_inf,
-                      policy=policy, output_every=output_every, max_cutbacks=max_cutbacks, tying=tying))
+                      policy=policy, output_every=output_every, max_cutbacks=max_cutbacks, tying=tying,
+                      adaptive=adaptive))
 
 
 def settle_spin(dyn, omega, settle_time: float, h: float = 5e-3):
@@ -406,7 +408,7 @@ def rigid_body_reference(dyn, state, velocity: np.ndarray, times: np.ndarray) ->
 
 def tumbling_plate(nx: int = 2, ny: int = 1, thickness: float = 0.01, omega: tuple = (0.05, 5.0, 0.05),
                    dt: float = 5e-3, end_time: float = 3.0, rho_inf: float = 0.9, policy: str = "modified",
-                   output_every: int = 1, settle_time: float = 0.1) -> Scene:
+                   output_every: int = 1, settle_time: float = 0.1, adaptive: bool = False) -> Scene:
     """Stiff free plate (1 x 0.5 x 0.01, E=1e9) tumbling about its intermediate axis vs Euler's equations.
 
     Spun at omega = (0.05, 5, 0.05) rad/s (mostly about y, the intermediate principal axis, so the small
@@ -423,7 +425,7 @@ def tumbling_plate(nx: int = 2, ny: int = 1, thickness: float = 0.01, omega: tup
     state, v = settle_spin(dyn, np.asarray(omega, dtype=float), settle_time)
     xdot, w = nodal_fields(dyn, state, v)
     analysis = DynamicAnalysis(dt, end_time, rho_inf, policy, output_every, initial_state=state,
-                               initial_velocity=xdot, initial_angular_velocity=w)
+                               initial_velocity=xdot, initial_angular_velocity=w, adaptive=adaptive)
     times = analysis.output_times()
     ref = Reference(times, rigid_body_reference(dyn, state, v, times),
                     "rigid body with the discrete inertia, Euler's equations (scipy DOP853, rtol 1e-11)")
@@ -431,7 +433,8 @@ def tumbling_plate(nx: int = 2, ny: int = 1, thickness: float = 0.01, omega: tup
     return Scene("tumbling_plate", "stiff free plate tumbling about its intermediate axis vs Euler's equations",
                  model, analysis, outs, ref,
                  dict(nx=nx, ny=ny, thickness=thickness, omega=list(omega), dt=dt, end_time=end_time,
-                      rho_inf=rho_inf, policy=policy, output_every=output_every, settle_time=settle_time))
+                      rho_inf=rho_inf, policy=policy, output_every=output_every, settle_time=settle_time,
+                      adaptive=adaptive))
 
 
 BUILTIN = {

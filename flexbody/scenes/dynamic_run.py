@@ -295,6 +295,22 @@ class DynamicRunSummary:
     size: float = 0.0
 
     @property
+    def largest_step(self) -> float:
+        """The longest time step taken (the fixed step, or the adaptive run's longest accepted one)."""
+        fixed = self.analysis.end_time / self.analysis.n_steps
+        taken = getattr(self.result, "max_step", float("nan"))
+        return float(taken) if getattr(self.result, "adaptive", False) and np.isfinite(taken) else fixed
+
+    def step_summary(self) -> dict:
+        """Accepted and rejected steps (by the error estimate, by Newton failures) and the step sizes taken."""
+        r = self.result
+        return {"adaptive": bool(getattr(r, "adaptive", False)), "accepted": int(getattr(r, "steps", self.steps)),
+                "rejected_error": int(getattr(r, "rejected_error", 0)),
+                "rejected_newton": int(getattr(r, "rejected_newton", 0)),
+                "min": float(getattr(r, "min_step", float("nan"))), "max": float(getattr(r, "max_step", float("nan"))),
+                "error_tolerance": self.analysis.alpha_settings().error_tolerance}
+
+    @property
     def max_rel_error(self) -> float:
         return max((e["rel_error"] for e in self.errors), default=float("nan"))
 
@@ -337,7 +353,7 @@ class DynamicRunSummary:
         ``MAX_ENERGY_DRIFT`` or ``MAX_MOMENTUM_DRIFT`` of its scale, or the body turned by more than
         ``MAX_ROTATION_PER_STEP`` in a time step."""
         out = []
-        h = self.analysis.end_time / self.analysis.n_steps
+        h = self.largest_step
         resolved = RESOLVED_MOTION * np.finfo(float).eps * self.size / h    # a velocity
         e = {k: np.asarray(self.energies[k], dtype=float) for k in ENERGY_KEYS}
         energy_velocity = np.sqrt(2.0 * np.max(e["kinetic"] + e["strain"] + np.abs(e["gravity"])) / self.total_mass)
@@ -366,6 +382,7 @@ class DynamicRunSummary:
             "factorizations": st.factorizations, "wall_time_s": self.wall_time_s,
             "converged": self.result.converged, "message": self.result.message, "time": float(self.result.time),
             "end_time": a.end_time, "time_step": a.end_time / a.n_steps, "rho_inf": a.rho_inf, "policy": a.policy,
+            "time_steps": self.step_summary(),
             "outputs": {k: v[-1] for k, v in self.history.items() if k != "time" and v},
             "errors": self.errors, "max_rel_error": self.max_rel_error,
             "energy": self.energy_summary(), "momentum": self.momentum_summary(),
@@ -419,7 +436,9 @@ def _state_record(dyn, step: int, t: float, state, velocity: np.ndarray, wall_ti
 
 
 def _steps_taken(result, a: DynamicAnalysis) -> int:
-    """The number of whole time steps behind ``result.time`` (the integrator's steps end on a fixed grid)."""
+    """The number of time steps behind ``result.time`` (the fixed steps end on a grid; adaptive: counted)."""
+    if getattr(result, "adaptive", False):
+        return int(result.steps)
     return int(round(result.time / (a.end_time / a.n_steps)))
 
 
@@ -453,7 +472,7 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
             rec.motion["velocity"], rec.motion["angular_velocity"] = nodal_fields(dyn, q, rec.motion["v"])
             rec.motion["acceleration"], rec.motion["angular_acceleration"] = nodal_fields(dyn, q, rec.motion["vdot"])
         history["time"].append(rec.time)
-        rate = rotation_rate(dyn, q, v) * h
+        rate = rotation_rate(dyn, q, v) * (rec.h or h)      # the step that led here (adaptive: varies)
         if rate > turn[0]:
             turn[:] = [rate, float(rec.time)]
         for out in scene.outputs:

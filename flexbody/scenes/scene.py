@@ -187,6 +187,11 @@ class DynamicAnalysis:
         20 steps of 1152 elements 0.72 s and 1.37 s), numba's default otherwise
     point_masses : tip masses and rotary inertias at nodes (:class:`flexbody.shell.inertia.PointMass`),
         added to the shell's lumped inertia
+    adaptive : error-controlled time steps (True), the fixed step (False), or None: the ``settings``' choice
+        (fixed by default). Adaptive: ``time_step`` is the first step and the unit of the output times (every
+        ``output_every``-th multiple of it, where the steps land), no step is longer than the output interval,
+        and the tolerance and step limits are ``settings.error_tolerance``, ``min_step``, ``max_step``
+        (docs/dynamics.md, "Adaptive time steps")
 
     Compared by identity (it holds arrays and functions).
     """
@@ -210,6 +215,7 @@ class DynamicAnalysis:
     threads: int | None = None
     point_masses: tuple = ()
     damping: object | None = None
+    adaptive: bool | None = None
 
     def __post_init__(self) -> None:
         for name in ("time_step", "end_time"):
@@ -233,6 +239,8 @@ class DynamicAnalysis:
         g = np.asarray(self.gravity, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ValueError(f"gravity must be a finite 3-vector, got {self.gravity!r}")
+        if self.adaptive is not None and not isinstance(self.adaptive, bool):
+            raise ValueError(f"adaptive must be True, False or None, got {self.adaptive!r}")
         from flexbody.dynamics import RayleighDamping
         if self.damping is not None and not isinstance(self.damping, RayleighDamping):
             raise ValueError(f"damping must be a RayleighDamping or None, got {type(self.damping).__name__}")
@@ -252,7 +260,13 @@ class DynamicAnalysis:
         """The :class:`integrators.generalized_alpha.AlphaSettings` of this analysis."""
         from integrators.generalized_alpha import AlphaSettings
         base = self.settings if self.settings is not None else AlphaSettings()
-        return replace(base, rho_inf=float(self.rho_inf), policy=self.policy)
+        out = replace(base, rho_inf=float(self.rho_inf), policy=self.policy)
+        return out if self.adaptive is None else replace(out, adaptive=self.adaptive)
+
+    @property
+    def is_adaptive(self) -> bool:
+        """Error-controlled time steps (``adaptive``, else the settings')."""
+        return bool(self.alpha_settings().adaptive)
 
 
 @dataclass

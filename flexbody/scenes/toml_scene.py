@@ -13,13 +13,15 @@ In short (every table but ``[mesh]``, ``[material]`` and one ``[[output]]`` is o
     [[point_mass]]         mass, rotary, a node selection: tip masses (dynamic)
     [analysis]             method = "load_control" | "arc_length", steps, max_load_factor, ...
     [analysis.newton]      any field of integrators.newton.NewtonSettings
-      or [analysis]        type = "dynamic", dt, end_time, rho_inf, policy, output_every, gravity, load_ramp_time
+      or [analysis]        type = "dynamic", dt, end_time, rho_inf, policy, output_every, gravity, load_ramp_time,
+                           adaptive (error-controlled time steps)
     [analysis.initial]     velocity, angular_velocity, center: a rigid initial velocity field (dynamic);
                            state = "steady_spin": start on the steady spin at angular_velocity instead
     [[analysis.initial.velocity_field]]  direction, amplitude, radial, modes, ...: added (a kick)
     [analysis.hub]         a node selection (or radius, or polygon), angular_velocity, ramp_time, center:
                            a hub spun up (dynamic)
-    [analysis.integrator]  rtol, atol, max_iterations, refresh_ratio, max_cutbacks, ... (dynamic)
+    [analysis.integrator]  rtol, atol, max_iterations, refresh_ratio, max_cutbacks, error_tolerance, min_step,
+                           max_step, safety, ... (dynamic)
     [analysis.damping]     alpha_mass (1/s) and/or beta_stiffness (s), or ratio + frequencies_hz = [f1, f2]:
                            Rayleigh damping (dynamic)
     [[output]]             name, a node selection of one node, component or direction, scale; or
@@ -79,7 +81,7 @@ _ANALYSIS_KEYS = ("method", "steps", "max_load_factor", "load_factors", "arc_inc
                   "max_steps", "min_increment_ratio", "max_increment_ratio", "desired_iterations", "newton",
                   "stability")
 _DYNAMIC_KEYS = ("type", "dt", "end_time", "rho_inf", "policy", "output_every", "gravity", "load_ramp_time",
-                 "initial", "hub", "integrator", "damping")
+                 "initial", "hub", "integrator", "damping", "adaptive")
 _DAMPING_KEYS = ("alpha_mass", "beta_stiffness", "ratio", "frequencies_hz")
 _OUTPUT_TYPES = ("displacement", "radial", "angular_velocity")
 _ELEMENT_KEYS = ("tying", "kernel")
@@ -506,7 +508,7 @@ def _build_integrator(t: _Table | None):
     from integrators.generalized_alpha import AlphaSettings
     if t is None:
         return None
-    names = [f.name for f in fields(AlphaSettings) if f.name not in ("rho_inf", "policy")]
+    names = [f.name for f in fields(AlphaSettings) if f.name not in ("rho_inf", "policy", "adaptive")]
     kwargs = {}
     for f in fields(AlphaSettings):
         if f.name not in names or not t.has(f.name):
@@ -711,6 +713,7 @@ def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None, load_
     rho_inf = t.number("rho_inf", 0.9)
     policy = t.string("policy", "modified", choices=("modified", "full"))
     every = t.integer("output_every", 1)
+    adaptive = t.boolean("adaptive") if t.has("adaptive") else None
     gravity = t.vector("gravity", [0.0, 0.0, 0.0])
     ramp = t.number("load_ramp_time", 0.0)
     if ramp < 0:
@@ -719,7 +722,7 @@ def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None, load_
     if load_functions:
         load_factor = GroupFactors((load_factor or constant, *load_functions))
     settings = _build_integrator(t.table("integrator") if t.has("integrator") else None)
-    kwargs: dict[str, Any] = {"point_masses": tuple(point_masses)}
+    kwargs: dict[str, Any] = {"point_masses": tuple(point_masses), "adaptive": adaptive}
     if t.has("damping"):
         kwargs["damping"] = _build_damping(t.table("damping"))
     if t.has("initial"):

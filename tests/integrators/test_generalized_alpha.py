@@ -370,6 +370,8 @@ def test_cutbacks_rescue_a_large_amplitude_step():
     cut = generalized_alpha(dyn, t_end, period / 40, velocity=v0, settings=AlphaSettings(rho_inf=0.9, max_cutbacks=4))
     assert cut.converged, cut.message
     assert max(r.substeps for r in cut.records) > 1
+    assert cut.rejected_newton == sum(r.rejected_newton for r in cut.records) > 0     # the failed tries, counted
+    assert cut.steps == sum(r.substeps for r in cut.records) and cut.min_step < cut.max_step == period / 40
     ref = generalized_alpha(dyn, t_end, period / 320, velocity=v0, settings=AlphaSettings(rho_inf=0.9))
     assert ref.converged, ref.message
     # measured 9.5e-3 m with 2 steps cut (4 m/s: 2.85e-3 m): the cut steps cost the second order locally

@@ -113,6 +113,13 @@ def test_bench_of_a_dynamic_toml_scene_sweeps_dt(tmp_path):
     (('type = "dynamic"\n', 'type = "dynamic"\nrho_inf = 2.0\n'), "rho_inf must lie in [0, 1], got 2.0"),
     (("density = 1000.0", "density = 0.0"), "material.density must be > 0 for a dynamic analysis, got 0.0"),
     (('component = "z"', 'component = "w"'), "output.1.component must be one of 'x', 'y', 'z', got 'w'"),
+    (('type = "dynamic"\n', 'type = "dynamic"\nadaptive = 1\n'), "analysis.adaptive must be true or false, got 1"),
+    (("[analysis.initial]\n", "[analysis.integrator]\nerror_tolerance = 2.0\n[analysis.initial]\n"),
+     "error_tolerance must lie in (0, 1)"),
+    (("[analysis.initial]\n", "[analysis.integrator]\nmin_step = 1.0\nmax_step = 0.1\n[analysis.initial]\n"),
+     "min_step must not exceed max_step, got 1.0 > 0.1"),
+    (("[analysis.initial]\n", "[analysis.integrator]\nsafety = 1.5\n[analysis.initial]\n"),
+     "safety must lie in (0, 1], got 1.5"),
 ])
 def test_bad_dynamic_toml_is_one_line(tmp_path, edit, message):
     path = write(tmp_path, PLATE.replace(*edit))
@@ -131,6 +138,26 @@ def test_an_angular_velocity_output_needs_a_dynamic_analysis(tmp_path):
 def test_set_overrides_the_time_step_of_a_scene_file(tmp_path):
     scene = load_toml_scene(write(tmp_path, PLATE), {"dt": 1e-3, "end_time": 0.01})
     assert scene.analysis.time_step == 1e-3 and scene.analysis.n_steps == 10
+
+
+def test_adaptive_steps_in_a_scene_file_land_on_the_output_times(tmp_path):
+    """``adaptive = true``: records at every output_every-th multiple of dt, the step counts in the JSON."""
+    text = PLATE.replace('type = "dynamic"\n', 'type = "dynamic"\nadaptive = true\noutput_every = 2\n')
+    scene = load_toml_scene(write(tmp_path, text))
+    assert scene.analysis.is_adaptive and scene.analysis.alpha_settings().adaptive
+    s = run_scene(scene)
+    assert s.result.converged, s.result.message
+    np.testing.assert_allclose(s.history["time"], scene.analysis.output_times(), rtol=0, atol=1e-15)
+    d = s.as_dict()
+    steps = d["time_steps"]
+    assert steps["adaptive"] and steps["accepted"] == s.steps == sum(r.substeps for r in s.result.records)
+    assert 0 < steps["min"] <= steps["max"] <= 2 * 2e-3 and d["time"] == 0.02
+    # the fixed step: the same file without the key (and ``--set adaptive=false``)
+    assert not load_toml_scene(write(tmp_path, text), {"adaptive": False}).analysis.is_adaptive
+    assert not load_toml_scene(write(tmp_path, PLATE)).analysis.is_adaptive
+    # the built-in dynamic scenes take it too (``flexbody run spinning_plate --set adaptive=true``)
+    assert build("spinning_plate", nx=1, ny=1, adaptive=True).analysis.is_adaptive
+    assert not build("spinning_plate", nx=1, ny=1).analysis.is_adaptive
 
 
 # -- fuzz: a mutated dynamic scene document builds or fails with one SceneError line ---------------------
