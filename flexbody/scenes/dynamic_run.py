@@ -440,7 +440,7 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
 
     model, a = scene.model, scene.analysis
     dyn = DynamicModel(model, gravity=a.gravity, load_factor=a.load_factor, prescribed=list(a.prescribed),
-                       point_masses=list(a.point_masses), damping=a.damping)
+                       point_masses=list(a.point_masses), damping=a.damping, mass=a.mass)
     state, v0 = initial_conditions(dyn, a)
     history: dict[str, list[float]] = {"time": [], **{o.name: [] for o in scene.outputs}}
     energies: dict[str, list] = {k: [] for k in ("time", *ENERGY_KEYS, "linear_momentum", "angular_momentum")}
