@@ -260,8 +260,8 @@ class DynamicModel:
         if self.mass == "lumped":     # exactly diag(m_I, j_I)
             return sp.diags(np.where(self.is_translation, self.body_mass.scalar.diagonal()[self.node], rot)).tocsc()
         T = self._directions()
-        M = T.T @ sp.kron(self.body_mass.scalar, sp.eye(3)) @ T + sp.diags(rot)
-        return M.tocsc()
+        M = T.T @ sp.kron(self.body_mass.scalar, sp.eye(3)) @ T
+        return (0.5 * (M + M.T) + sp.diags(rot)).tocsc()          # symmetric to the last bit
 
     def _prescribed_coupling(self) -> sp.csr_matrix | None:
         """M_fp (n_dof x 3k): the consistent mass between the free DoFs and the translations of the k prescribed
