@@ -268,7 +268,7 @@ def in_plane_annulus(n_radial):
 
 def test_radial_membrane_frequencies_of_the_annulus_converge_faster_with_the_consistent_mass():
     """The in-plane breathing modes of the hub annulus against the Bessel solution, on the issue's 4 x 32 mesh
-    and on 8 x 64: HRZ underestimates the higher ones, the consistent mass overestimates them (an upper bound);
+    and on 8 x 64: HRZ underestimates the higher ones, the consistent mass overestimates them;
     the consistent mass converges at about fourth order (error ratios 10-15 per halving), HRZ at about second
     (2.3-5): measured, modes 1-4, 4 x 32: lumped +0.14, -0.14, -0.62, -1.56 %, consistent +0.03, +0.15, +0.85,
     +2.62 %; 8 x 64: lumped +0.027, -0.059, -0.213, -0.434 %, consistent +0.003, +0.010, +0.060, +0.217 %."""
