@@ -154,7 +154,7 @@ def prescribed_acceleration(motion: Callable, X: np.ndarray, t: float) -> np.nda
         return X @ np.asarray(Q, float).T + np.asarray(d, float)
 
     x0 = x(t)
-    size = float(np.abs(x0).max()) or 1.0
+    size = float(np.ptp(x0, axis=0).max()) or float(np.abs(x0).max()) or 1.0     # the points' extent
     s = 1.0
     for _ in range(40):                       # s <- s (target / moved), clipped: a few iterations
         moved = float(np.abs(x(t + s) - x0).max())
