@@ -123,6 +123,27 @@ def test_consistent_mass_matrix_on_constraint_bases_gravity_and_point_masses(rng
     assert np.abs(P @ M @ P.T - M).max() < 1e-14 * np.abs(M).max()
 
 
+def test_residual_derivatives_in_the_accelerations_and_velocities_are_the_iteration_matrix_terms(rng):
+    """dr/dvdot = M and dr/dv = a0 M + a1 K_m (mass and stiffness damping) by central differences, with the
+    consistent mass, at a random deformed state: what the iteration matrix S = M beta' + C gamma' + K uses."""
+    from flexbody.dynamics import RayleighDamping
+    body = distorted_plate(rng)
+    dyn = DynamicModel(Model(body, [Fix([0, 1], "all")]), damping=RayleighDamping(3.0, 1e-4), mass="consistent")
+    q = dyn.update(dyn.model.initial_state(), 0.01 * rng.normal(size=dyn.n_dof))
+    v, vdot = rng.normal(size=dyn.n_dof), rng.normal(size=dyn.n_dof)
+    eps = 1.0                 # r is linear in vdot and v: a large step keeps the internal forces' round-off out
+    E_ = np.eye(dyn.n_dof)
+    d_vdot = np.column_stack([(dyn.residual(q, v, vdot + eps * e, 0.0) - dyn.residual(q, v, vdot - eps * e, 0.0))
+                              / (2 * eps) for e in E_])
+    d_v = np.column_stack([(dyn.residual(q, v + eps * e, vdot, 0.0) - dyn.residual(q, v - eps * e, vdot, 0.0))
+                           / (2 * eps) for e in E_])
+    M = dyn.mass_matrix().toarray()
+    assert np.abs(d_vdot - M).max() < 1e-7 * np.abs(M).max()
+    C = dyn.damping_matrix(q).toarray()
+    assert np.abs(d_v - C).max() < 1e-6 * np.abs(C).max()
+    assert np.abs(C - 3.0 * M - 1e-4 * dyn.material_stiffness(q).toarray()).max() < 1e-12 * np.abs(C).max()
+
+
 def test_bad_mass_kind_is_refused_with_the_value():
     body = distorted_plate(np.random.default_rng(0))
     with pytest.raises(ValueError, match="mass must be 'lumped' or 'consistent', got 'diagonal'"):
