@@ -83,7 +83,7 @@ def test_consistent_mass_has_the_exact_rigid_body_inertia_of_a_plate(rng):
         M = dyn.mass_matrix().toarray()
         assert np.abs(M - M.T).max() == 0.0 and np.linalg.eigvalsh(M).min() > 0
     assert errors["consistent"][0] < 1e-14 and errors["consistent"][1] < 1e-13
-    assert errors["lumped"][1] > 1e-3             # measured 1.1e-2: HRZ is not exact for the second moments
+    assert errors["lumped"][1] > 1e-2             # measured 4.6e-2: HRZ is not exact for the second moments
 
 
 def test_consistent_mass_matrix_on_constraint_bases_gravity_and_point_masses(rng):
@@ -194,7 +194,7 @@ def test_steady_spin_is_an_equilibrium_of_the_consistent_mass_dynamics(case):
     centripetal = -OMEGA**2 * s.state.x
     centripetal[:, 2] = 0.0
     moving = ~np.all(dyn.model.fixed[:, :3], axis=1)
-    # measured: 2.7e-10 (hub), 2.7e-8 (free: the gauge's solver tolerance), 1.2e-8 (driven: the hub's
+    # measured: 2.3e-10 (hub), 2.7e-8 (free: the gauge's solver tolerance), 1.1e-9 (driven: the hub's
     # acceleration by finite differences)
     assert np.abs(xddot[moving] - centripetal[moving]).max() < 1e-6 * np.abs(centripetal).max()
     if case == "driven hub":   # without the hub's coupling M_fp a_p: 2.7e-2 (6.8 % on the first ring)
