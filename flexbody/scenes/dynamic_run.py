@@ -366,6 +366,7 @@ class DynamicRunSummary:
             "factorizations": st.factorizations, "wall_time_s": self.wall_time_s,
             "converged": self.result.converged, "message": self.result.message, "time": float(self.result.time),
             "end_time": a.end_time, "time_step": a.end_time / a.n_steps, "rho_inf": a.rho_inf, "policy": a.policy,
+            "mass": a.mass,
             "outputs": {k: v[-1] for k, v in self.history.items() if k != "time" and v},
             "errors": self.errors, "max_rel_error": self.max_rel_error,
             "energy": self.energy_summary(), "momentum": self.momentum_summary(),
