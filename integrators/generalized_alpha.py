@@ -203,9 +203,9 @@ def _configuration(dyn, q_n, x: np.ndarray, t: float):
 class GeneralizedAlpha:
     """The integrator with its iteration matrix, factorization and counters (reused across steps).
 
-    ``dyn`` supplies ``mass_matrix()`` (sparse, n x n; or a diagonal ``mass`` (n,)), ``residual(q, v, vdot, t)``, ``residual_and_tangent(q, v, vdot, t)``,
-    ``update(q, dq)``, ``dof_scale``, optionally ``damping_matrix(q)`` and ``damping_force(q, v)``, and,
-    for the outputs, ``kinetic_energy``, ``strain_energy``, ``gravity_potential``, ``momenta`` (see
+    ``dyn`` supplies ``mass_matrix()`` (sparse, n x n; or a diagonal ``mass`` (n,)), ``residual(q, v, vdot, t)``,
+    ``residual_and_tangent(q, v, vdot, t)``, ``update(q, dq)``, ``dof_scale``, optionally ``damping_matrix(q)``
+    and ``damping_force(q, v)``, and, for the outputs, ``kinetic_energy``, ``strain_energy``, ``gravity_potential``, ``momenta`` (see
     :class:`flexbody.dynamics.DynamicModel`).
     """
 

@@ -1411,7 +1411,8 @@ class ShellODE2:
     start of a step and off by O(|dtheta|) inside it, so Newton converges to the same solution, a little
     slower than quadratically.
 
-    Dynamics: with ``mass`` (the constant mass on the free DoFs, ``flexbody.dynamics.DynamicModel.mass_matrix()``; in these coordinates there are no gyroscopic or centrifugal terms) exudyn's implicit
+    Dynamics: with ``mass`` (the constant mass on the free DoFs, ``flexbody.dynamics.DynamicModel.mass_matrix()``,
+    lumped or consistent; in these coordinates there are no gyroscopic or centrifugal terms) exudyn's implicit
     integrators run the shell; the velocities q_t are taken as the DoF velocities (fixed-direction
     translation rates, local angular velocities w_1, w_2), committed with the frames at every step.
     Without ``mass`` the mass matrix is zero: statics only.
