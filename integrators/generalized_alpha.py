@@ -205,8 +205,8 @@ class GeneralizedAlpha:
 
     ``dyn`` supplies ``mass_matrix()`` (sparse, n x n; or a diagonal ``mass`` (n,)), ``residual(q, v, vdot, t)``,
     ``residual_and_tangent(q, v, vdot, t)``, ``update(q, dq)``, ``dof_scale``, optionally ``damping_matrix(q)``
-    and ``damping_force(q, v)``, and, for the outputs, ``kinetic_energy``, ``strain_energy``, ``gravity_potential``, ``momenta`` (see
-    :class:`flexbody.dynamics.DynamicModel`).
+    and ``damping_force(q, v)``, and, for the outputs, ``kinetic_energy``, ``strain_energy``,
+    ``gravity_potential``, ``momenta`` (see :class:`flexbody.dynamics.DynamicModel`).
     """
 
     def __init__(self, dyn, h: float, settings: AlphaSettings | None = None,
