@@ -1,7 +1,7 @@
 """Spinning membranes at real scale: the acceptance cases of issue #15, as scene files run through the API.
 
     python benchmarks/spinning_membranes.py [CASE ...] [--revolutions R] [--cells 4,8,16]
-                                             [--thickness 1e-3,1e-6] [--out FILE]
+                                             [--thickness 1e-3,1e-6] [--mass consistent] [--out FILE]
 
 Cases (all start on the steady spin, ``[analysis.initial] state = "steady_spin"``, at default settings):
 
@@ -54,6 +54,7 @@ type = "dynamic"
 dt = {dt}
 end_time = {end}
 output_every = 10
+mass = "{mass}"
 [analysis.initial]
 state = "steady_spin"
 angular_velocity = [0.0, 0.0, {omega}]
@@ -123,6 +124,7 @@ def main() -> None:
     parser.add_argument("--revolutions", type=float, default=20.0)
     parser.add_argument("--cells", default="4,8,16", help="radial cells of the annuli")
     parser.add_argument("--thickness", default="1e-3,1e-4,1e-5,1e-6", help="h/R of the hub annulus")
+    parser.add_argument("--mass", default="lumped", choices=("lumped", "consistent"), help="the mass matrix")
     parser.add_argument("--out", default=None)
     args = parser.parse_args()
     period = 2 * math.pi / OMEGA
@@ -134,19 +136,21 @@ def main() -> None:
         if case == "hub":
             for h in (float(v) for v in args.thickness.split(",")):
                 for nr in cells:
-                    text = ANNULUS.format(name="hub", a=0.2, nr=nr, nc=8 * nr, h=h, dt=dt, end=end, omega=OMEGA)
+                    text = ANNULUS.format(name="hub", a=0.2, nr=nr, nc=8 * nr, h=h, dt=dt, end=end, omega=OMEGA,
+                                          mass=args.mass)
                     text += HUB.format(a=0.2, omega=OMEGA)
                     rows.append(_run(f"hub annulus {nr}x{8 * nr}, h/R {h:g}", lambda t=text: _scene(t), OMEGA))
                     print(rows[-1], flush=True)
         elif case == "free":
             for a in (0.1, 0.5):
                 nr = cells[0]
-                text = ANNULUS.format(name="free", a=a, nr=nr, nc=8 * nr, h=1e-3, dt=dt, end=end, omega=OMEGA)
+                text = ANNULUS.format(name="free", a=a, nr=nr, nc=8 * nr, h=1e-3, dt=dt, end=end, omega=OMEGA,
+                                      mass=args.mass)
                 rows.append(_run(f"free annulus a/b {a}, {nr}x{8 * nr}", lambda t=text: _scene(t), None))
                 print(rows[-1], flush=True)
         elif case == "sail":                                   # examples/solar_sail_10m.toml, 2 rpm
             sail_period = 60.0 / 2
-            overrides = {"dt": sail_period / 100, "end_time": args.revolutions * sail_period}
+            overrides = {"dt": sail_period / 100, "end_time": args.revolutions * sail_period, "mass": args.mass}
             rows.append(_run("10 m hexagonal sail, 4 rings, 2 rpm, 2 mN rim pulse",
                              lambda: load_toml_scene(SAIL, overrides), 2 * 2 * math.pi / 60))
             print(rows[-1], flush=True)

@@ -324,7 +324,7 @@ def explicit_limits(dyn) -> dict:
     s = dyn.model.initial_state()
     _, K = dyn.residual_and_tangent(s, np.zeros(dyn.n_dof), np.zeros(dyn.n_dof), 0.0)
     K = 0.5 * (K + K.T)
-    m = sp.diags(1.0 / np.sqrt(dyn.mass))
+    m = sp.diags(1.0 / np.sqrt(dyn.mass_matrix().diagonal()))
     A = (m @ K @ m).toarray()
     tr = dyn.is_translation
     w_full = math.sqrt(max(np.linalg.eigvalsh(A).max(), 0.0))

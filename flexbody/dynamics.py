@@ -23,9 +23,11 @@ Velocity layout: the Lie group is R^3 x SO(3) per node.
   stays at 0. So the drilling is a history variable of the formulation, in dynamics as in statics. w_3 = 0 is then a velocity constraint that
   does no work (Lagrange-d'Alembert): the equations of motion are the five per node below, and energy is
   conserved because f_int . v = dW/dt along 5-DoF motions (tests/shell/test_inertia.py).
-Both pieces of the mass are constant (lumped, see :mod:`flexbody.shell.inertia`): M = diag(m_I, j_I) and
-there are no gyroscopic or centrifugal terms in these coordinates (the centripetal accelerations of a
-spinning body are simply the global accelerations of its nodes).
+Both pieces of the mass are constant (see :mod:`flexbody.shell.inertia`): M = diag(m_I, j_I) lumped (HRZ), or
+with ``mass="consistent"`` the translational block S x I_3, S_IJ = int rho h N_I N_J dA, next to the lumped
+director inertia j_I; there are no gyroscopic or centrifugal terms in these coordinates (the centripetal
+accelerations of a spinning body are simply the global accelerations of its nodes). With the consistent mass
+the free nodes next to a prescribed (driven) node feel its acceleration: M_fp a_p(t) is part of g(q, t).
 
 The Model's translational *equations* already are force components in fixed directions; its translational
 *columns* are local increments du (x <- x + R du). ``DynamicModel`` maps them: du = R^T dx, which the Model's
@@ -43,7 +45,8 @@ import scipy.sparse as sp
 
 from flexbody.assembly import Model
 from flexbody.body import ShellState
-from flexbody.shell.inertia import NodalInertia, nodal_inertia, with_point_masses
+from flexbody.shell.inertia import (NodalInertia, ShellMass, check_mass_kind, nodal_inertia, shell_mass,
+                                    with_point_masses)
 
 
 @dataclass(frozen=True)
@@ -136,6 +139,37 @@ def director_step(frames: np.ndarray, target: np.ndarray) -> np.ndarray:
     return out
 
 
+def prescribed_acceleration(motion: Callable, X: np.ndarray, t: float) -> np.ndarray:
+    """xddot (k, 3) at time t of the points x(t) = Q(t) X + d(t) of a prescribed motion, by finite differences.
+
+    A one-sided second-order difference (the motion need not be defined before the start),
+    xddot ~ (2 x(t) - 5 x(t + s) + 4 x(t + 2s) - x(t + 3s)) / s^2, with the step s set from the motion itself so
+    that the points move by about 1e-4 of their extent over s (truncation and round-off both ~1e-8 relative:
+    scale-free in time and length). A motion at rest over 1e6 time units has zero acceleration.
+    """
+    X = np.asarray(X, dtype=float)
+
+    def x(time: float) -> np.ndarray:
+        Q, d = motion(time)
+        return X @ np.asarray(Q, float).T + np.asarray(d, float)
+
+    x0 = x(t)
+    size = float(np.ptp(x0, axis=0).max()) or float(np.abs(x0).max()) or 1.0     # the points' extent
+    s = 1.0
+    for _ in range(40):                       # s <- s (target / moved), clipped: a few iterations
+        moved = float(np.abs(x(t + s) - x0).max())
+        if moved == 0.0:
+            if s >= 1e6:
+                return np.zeros_like(x0)
+            s *= 1e3
+            continue
+        ratio = 1e-4 * size / moved
+        if 0.5 < ratio < 2.0:
+            break
+        s *= min(max(ratio, 1e-3), 1e3)
+    return (2.0 * x0 - 5.0 * x(t + s) + 4.0 * x(t + 2 * s) - x(t + 3 * s)) / s**2
+
+
 @dataclass
 class DynamicModel:
     """Equations of motion of a constrained, loaded shell body.
@@ -153,6 +187,9 @@ class DynamicModel:
         inertia (``inertia``): they take part in everything the mass does (inertia forces, gravity, energies,
         momenta, the steady spin's centrifugal load)
     damping : Rayleigh damping (:class:`RayleighDamping`), or None (undamped)
+    mass : "lumped" (HRZ, diagonal; the default) or "consistent" (translations int rho h N_I N_J dA, the
+        director inertia lumped): :meth:`mass_matrix`. Everything that uses the mass uses this one (inertia
+        forces, iteration matrix, gravity, energies, momenta, mass damping, the steady spin's load).
     """
 
     model: Model
@@ -161,7 +198,9 @@ class DynamicModel:
     prescribed: list = field(default_factory=list)
     point_masses: list = field(default_factory=list)
     damping: RayleighDamping | None = None
+    mass: str = "lumped"
     inertia: NodalInertia = field(init=False)
+    body_mass: ShellMass = field(init=False)
 
     def __post_init__(self) -> None:
         self.gravity = np.asarray(self.gravity, dtype=float)
@@ -175,11 +214,14 @@ class DynamicModel:
         self.is_translation = self.comp < 3
         # free DoFs whose translation columns the Model takes as local increments (no fixed basis)
         self.local_columns = self.is_translation & ~m.has_basis[self.node]
-        self.mass = np.where(self.is_translation, self.inertia.mass[self.node], self.inertia.rotary[self.node])
-        if np.any(self.mass <= 0):
+        check_mass_kind(self.mass)
+        self.body_mass = shell_mass(m.body, self.mass, self.point_masses)
+        self._M = self._free_mass_matrix()
+        if np.any(self._M.diagonal() <= 0):
             raise ValueError("the mass matrix has non-positive entries: the material density must be > 0")
+        self._M_solve = None
         self.dof_scale = m.dof_scale
-        self._gravity_force = self._fixed_direction_vectors(self.inertia.mass[:, None] * self.gravity)
+        self._gravity_force = self._fixed_direction_vectors(self.body_mass.nodal[:, None] * self.gravity)
         # for the column map: the free DoF index of (node, translation component) of local-column nodes
         nodes = np.unique(self.node[self.local_columns])
         index = -np.ones((m.body.n_nodes, 6), dtype=np.int64)
@@ -199,6 +241,58 @@ class DynamicModel:
             bad = p.nodes[~np.all(m.fixed[p.nodes, :5], axis=1)]
             if bad.size:
                 raise ValueError(f"prescribed motion on node {bad[0]}, which is not clamped (Fix(..., 'all'))")
+        self._M_fp = self._prescribed_coupling()
+
+    # -- the mass matrix -----------------------------------------------------------------------------------
+    def _directions(self) -> sp.csr_matrix:
+        """T (3n x n_dof): column a is the direction d_a of translation DoF a in the rows of its node (the
+        constraint basis column E_I[:, i], or e_i), zero for rotation DoFs. x_dot = T v (translations)."""
+        m = self.model
+        tr = np.flatnonzero(self.is_translation)
+        node, comp = self.node[tr], self.comp[tr]
+        d = m.basis[node, :, comp]                                   # (k, 3): E_I[:, i]
+        rows = (3 * node[:, None] + np.arange(3)).ravel()
+        return sp.csr_matrix((d.ravel(), (rows, np.repeat(tr, 3))), shape=(3 * m.body.n_nodes, self.n_dof))
+
+    def _free_mass_matrix(self) -> sp.csc_matrix:
+        """M on the free DoFs: T^T (S x I_3) T on the translations, diag(j_I) on the rotations."""
+        rot = np.where(self.is_translation, 0.0, self.body_mass.rotary[self.node])
+        if self.mass == "lumped":     # exactly diag(m_I, j_I)
+            return sp.diags(np.where(self.is_translation, self.body_mass.scalar.diagonal()[self.node], rot)).tocsc()
+        T = self._directions()
+        M = T.T @ sp.kron(self.body_mass.scalar, sp.eye(3)) @ T
+        return (0.5 * (M + M.T) + sp.diags(rot)).tocsc()          # symmetric to the last bit
+
+    def _prescribed_coupling(self) -> sp.csr_matrix | None:
+        """M_fp (n_dof x 3k): the consistent mass between the free DoFs and the translations of the k prescribed
+        nodes (None when it is zero: a lumped mass, or no prescribed motion)."""
+        if self.mass == "lumped" or not self.prescribed:
+            return None
+        nodes = np.concatenate([p.nodes for p in self.prescribed])
+        cols = (3 * nodes[:, None] + np.arange(3)).ravel()
+        Mp = (self._directions().T @ sp.kron(self.body_mass.scalar, sp.eye(3)).tocsc()[:, cols]).tocsr()
+        return Mp if Mp.nnz else None
+
+    def _prescribed_inertia(self, t: float) -> np.ndarray | float:
+        """M_fp a_p(t): the inertia forces on the free DoFs of the prescribed nodes' accelerations (0 lumped)."""
+        if self._M_fp is None:
+            return 0.0
+        X = self.model.body.mesh.nodes
+        a = np.concatenate([prescribed_acceleration(p.motion, X[p.nodes], t) for p in self.prescribed])
+        return self._M_fp @ a.ravel()
+
+    def mass_matrix(self) -> sp.csc_matrix:
+        """The constant mass matrix M on the free DoFs (CSC), lumped (diagonal) or consistent (``mass``)."""
+        return self._M
+
+    def solve_mass(self, f: np.ndarray) -> np.ndarray:
+        """M^-1 f (a division lumped, a sparse factorization kept for the model consistent)."""
+        if self.mass == "lumped":
+            return f / self._M.diagonal()
+        if self._M_solve is None:
+            from scipy.sparse.linalg import factorized
+            self._M_solve = factorized(self._M)
+        return self._M_solve(np.asarray(f, dtype=float))
 
     # -- sizes, loads ------------------------------------------------------------------------------------
     @property
@@ -271,11 +365,11 @@ class DynamicModel:
     # -- equations of motion -------------------------------------------------------------------------------
     def internal_minus_external(self, state: ShellState, t: float) -> np.ndarray:
         """g(q, t) = f_int(q) - lambda(t) f_ext(q) - f_g on the free DoFs."""
-        return self.model.residual(state, self.lam(t)) - self._gravity_force
+        return self.model.residual(state, self.lam(t)) - self._gravity_force + self._prescribed_inertia(t)
 
     def residual(self, state: ShellState, v: np.ndarray, vdot: np.ndarray, t: float) -> np.ndarray:
         """r = M vdot + f_d(q, v) + f_int - lambda f_ext - f_g (the equations of motion, exact)."""
-        return self.mass * vdot + self.damping_force(state, v) + self.internal_minus_external(state, t)
+        return self._M @ vdot + self.damping_force(state, v) + self.internal_minus_external(state, t)
 
     def residual_and_tangent(self, state: ShellState, v: np.ndarray, vdot: np.ndarray, t: float):
         """r and the stiffness K_t = dr/dq (columns along q o exp(eps e_k) in this layout), CSC.
@@ -284,14 +378,15 @@ class DynamicModel:
         approximation of the iteration matrix only; its velocity derivative is :meth:`damping_matrix`)."""
         r, K = self.model.residual_and_tangent(state, self.lam(t))
         K = (K @ self._column_map(state)).tocsc()
-        return self.mass * vdot + self.damping_force(state, v) + r - self._gravity_force, K
+        return (self._M @ vdot + self.damping_force(state, v) + r - self._gravity_force
+                + self._prescribed_inertia(t), K)
 
     def initial_acceleration(self, state: ShellState, t: float = 0.0, v: np.ndarray | None = None) -> np.ndarray:
         """vdot_0 = -M^-1 (f_d(q_0, v_0) + g(q_0, t_0)) (no gyroscopic forces in these coordinates)."""
         f = self.internal_minus_external(state, t)
         if v is not None:
             f = f + self.damping_force(state, v)
-        return -f / self.mass
+        return -self.solve_mass(f)
 
     # -- damping -------------------------------------------------------------------------------------------
     def material_damping_force(self, state: ShellState, v: np.ndarray) -> np.ndarray:
@@ -310,7 +405,7 @@ class DynamicModel:
         if d is None:
             return out
         if d.alpha_mass:
-            out += d.alpha_mass * self.mass * v
+            out += d.alpha_mass * (self._M @ v)
         if d.beta_stiffness:
             out += d.beta_stiffness * self.material_damping_force(state, v)
         return out
@@ -327,7 +422,7 @@ class DynamicModel:
         d = self.damping
         if d is None or not (d.alpha_mass or d.beta_stiffness):
             return None
-        C = sp.diags(d.alpha_mass * self.mass)
+        C = d.alpha_mass * self._M
         if d.beta_stiffness:
             C = C + d.beta_stiffness * self.material_stiffness(state)
         return C.tocsc()
@@ -378,7 +473,8 @@ class DynamicModel:
         frames are parallel-transported, so they turn about their directors relative to the body), the
         stiffness in these coordinates transforms as K -> P K P^T with P = Q on the fixed-direction
         translations (nodes without a constraint basis) and P = D_I^T (its in-plane 2 x 2 block) on the local
-        rotations; the lumped mass is invariant. An old factorization of M beta' + K then serves through P.
+        rotations; the mass is invariant (lumped: diagonal; consistent: S x I_3 commutes with Q on every node,
+        and the director part is j_I times the identity). An old factorization of M beta' + K then serves through P.
         Exact for rigid motion of a free body, an approximation (used only in the iteration matrix) otherwise.
 
         Returns Q (3, 3) and the 2 x 2 blocks D_I^T of the nodes with both rotations free (k, 2, 2).
@@ -443,8 +539,8 @@ class DynamicModel:
         return xdot, w
 
     def kinetic_energy(self, v: np.ndarray) -> float:
-        """1/2 v^T M v = 1/2 sum m_I |xdot_I|^2 + 1/2 sum j_I (w_1^2 + w_2^2)."""
-        return 0.5 * float(np.sum(self.mass * v * v))
+        """1/2 v^T M v = 1/2 sum_IJ S_IJ xdot_I . xdot_J + 1/2 sum j_I (w_1^2 + w_2^2) (lumped: S = diag(m_I))."""
+        return 0.5 * float(v @ (self._M @ v))
 
     def strain_energy(self, state: ShellState) -> float:
         """Elastic energy 1/2 sum_g w_g eps^T C eps from the numba strain kernel (same as body.strain_energy)."""
@@ -459,44 +555,44 @@ class DynamicModel:
         return 0.5 * float(np.einsum("eg,egi,ij,egj->", ref.weights, eps, C, eps))
 
     def gravity_potential(self, state: ShellState) -> float:
-        """-sum m_I g . x_I."""
-        return -float(self.inertia.mass @ (state.x @ self.gravity))
+        """-sum s_I g . x_I, s_I the row sums of the translational mass (m_I lumped, int rho h N_I dA consistent)."""
+        return -float(self.body_mass.nodal @ (state.x @ self.gravity))
 
     def momenta(self, state: ShellState, v: np.ndarray, center=None) -> tuple[np.ndarray, np.ndarray]:
         """Linear momentum p = sum m xdot and angular momentum about ``center`` (default origin).
 
-        L = sum_I (x_I - c) x m_I xdot_I + R_I J_I w_I, with J_I = j_I diag(1, 1, 0).
+        L = sum_I (x_I - c) x (S xdot)_I + R_I J_I w_I, with J_I = j_I diag(1, 1, 0) and S the translational
+        mass (diag(m_I) lumped): p = sum_IJ S_IJ xdot_J, the momenta of the mass matrix the equations use.
         """
         xdot, w = self.nodal_velocities(state, v)
-        m, j = self.inertia.mass, self.inertia.rotary
+        S, j = self.body_mass.scalar, self.body_mass.rotary
         c = np.zeros(3) if center is None else np.asarray(center, float)
-        p = m @ xdot
-        L = np.cross(state.x - c, m[:, None] * xdot).sum(axis=0)
+        Sx = S @ xdot
+        p = Sx.sum(axis=0)
+        L = np.cross(state.x - c, Sx).sum(axis=0)
         L += np.einsum("nij,nj->i", state.frames, j[:, None] * w)
         return p, L
 
     def rigid_angular_velocity(self, state: ShellState, v: np.ndarray) -> np.ndarray:
         """The least-squares rigid angular velocity of the nodal translational velocities (mass-weighted).
 
-        Minimises sum m_I |xdot_I - xdot_c - omega x (x_I - c)|^2: a kinematic fit, independent of the
-        director velocities and of the momenta.
+        Minimises the kinetic energy of xdot_I - xdot_c - omega x (x_I - c) in the translational mass S
+        (sum m_I |.|^2 lumped): a kinematic fit, independent of the director velocities.
         """
         xdot, _ = self.nodal_velocities(state, v)
-        m = self.inertia.mass
-        r = state.x - m @ state.x / m.sum()
-        rd = xdot - m @ xdot / m.sum()
-        A = np.einsum("n,nk,nk->", m, r, r) * np.eye(3) - np.einsum("n,ni,nj->ij", m, r, r)
-        return np.linalg.solve(A, np.cross(r, m[:, None] * rd).sum(axis=0))
+        S, s = self.body_mass.scalar, self.body_mass.nodal
+        r = state.x - s @ state.x / s.sum()
+        rd = xdot - s @ xdot / s.sum()
+        Sr = S @ r
+        A = np.einsum("nk,nk->", r, Sr) * np.eye(3) - r.T @ Sr
+        return np.linalg.solve(A, np.cross(r, S @ rd).sum(axis=0))
 
     def rigid_inertia_tensor(self, state: ShellState) -> tuple[np.ndarray, np.ndarray]:
         """Centre of mass c and inertia tensor about it of the discrete body frozen in ``state``.
 
-        I = sum m_I (|r_I|^2 1 - r_I r_I^T) + sum j_I (1 - t_I t_I^T), r_I = x_I - c, t_I the director.
+        I = sum_IJ S_IJ (r_I . r_J 1 - r_I r_J^T) + sum j_I (1 - t_I t_I^T), r_I = x_I - c, t_I the director,
+        S the translational mass (diag(m_I) lumped), c = sum s_I x_I / sum s_I with s_I its row sums.
         """
-        m, j = self.inertia.mass, self.inertia.rotary
-        c = (m @ state.x) / m.sum()
-        r = state.x - c
-        I = np.einsum("n,nk,nk->", m, r, r) * np.eye(3) - np.einsum("n,ni,nj->ij", m, r, r)
-        t = state.directors
-        I += j.sum() * np.eye(3) - np.einsum("n,ni,nj->ij", j, t, t)
-        return c, I
+        bm = self.body_mass
+        c = bm.centre(state.x)
+        return c, bm.inertia_tensor(state.x, state.directors, c)

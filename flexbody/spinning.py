@@ -8,9 +8,12 @@ problem in the turning frame::
 
     r_spin(q) = f_int(q) - lambda f_ext(q) - f_g - f_c(q) = 0
 
-with the centrifugal load f_c of the model's own (lumped) mass matrix,
+with the centrifugal load f_c of the model's own mass matrix (``DynamicModel.mass``, lumped or consistent),
 
-* on the translations: f_c,I = -m_I Omega x (Omega x r_I) = m_I (|Omega|^2 1 - Omega Omega^T) r_I,
+* on the translations: f_c,I = -sum_J S_IJ Omega x (Omega x r_J) = sum_J S_IJ (|Omega|^2 1 - Omega Omega^T) r_J
+  with S the translational scalar mass (S = diag(m_I) lumped; the sum runs over the free nodes and the driven
+  hub nodes, whose accelerations the dynamic model adds as M_fp a_p(t); a node clamped without a prescribed
+  motion stays at rest and adds nothing),
 * on the two director rotations: the moment j_I (t_I . Omega) (Omega x t_I), the inertia moment that
   makes the director of inertia j_I diag(1, 1, 0) follow the spin (zero for a director along the axis),
   in the nodal local frame m = j w_3 (w_2, -w_1) with w = R_I^T Omega (it is j wdot of the dynamic model
@@ -22,7 +25,7 @@ equations of motion: the dynamic run then stays on it (up to the time integrator
 uniform rotation is the phase error of the rigid motion only). The tangent of f_c on the group (columns
 along x_I + R_I du_I and R_I exp(theta)) is
 
-* translations: d f_c,I / d u_I = m_I (|Omega|^2 1 - Omega Omega^T) R_I (a negative stiffness: the spin
+* translations: d f_c,I / d u_J = S_IJ (|Omega|^2 1 - Omega Omega^T) R_J (a negative stiffness: the spin
   softens the radial direction), and
 * rotations: d m / d theta_k = (dm / dw) (w x e_k), because w -> exp(-hat(theta)) w = w + hat(w) theta.
 
@@ -155,31 +158,41 @@ class SpinningModel:
         S[m.has_basis] = np.transpose(m.basis[m.has_basis], (0, 2, 1))
         return S
 
+    def _moving(self) -> np.ndarray:
+        """The nodes that turn with the spin (n,) bool: all but those clamped in translation and not driven (those
+        stay at rest in the dynamic model, so their acceleration is zero: it matters for a consistent mass)."""
+        m = self.model
+        moving = ~np.all(m.fixed[:, :3], axis=1)
+        for p in self.dynamic.prescribed:
+            moving[p.nodes] = True
+        return moving
+
     def spin_load(self, state: ShellState) -> np.ndarray:
         """f_c on the free DoFs (the model's row layout): centrifugal forces and director moments."""
-        inertia = self.dynamic.inertia
+        bm = self.dynamic.body_mass
         f6 = np.zeros((self.model.body.n_nodes, 6))
-        f = centrifugal_forces(inertia.mass, state.x, self.omega, self.center)
+        f = bm.scalar @ centrifugal_forces(self._moving().astype(float), state.x, self.omega, self.center)
         f6[:, :3] = np.einsum("nij,nj->ni", self._row_maps(), f)
-        f6[:, 3:5] = director_spin_moments(inertia.rotary, state.frames, self.omega)
+        f6[:, 3:5] = director_spin_moments(bm.rotary, state.frames, self.omega)
         return f6.ravel()[self.model.free]
 
     def spin_load_tangent(self, state: ShellState) -> sp.csc_matrix:
         """d f_c / d q (free x free) along the model's increments (columns as :meth:`Model.update`)."""
-        m, inertia = self.model, self.dynamic.inertia
-        n = m.body.n_nodes
+        m, bm = self.model, self.dynamic.body_mass
         w2 = float(self.omega @ self.omega)
-        Kx = inertia.mass[:, None, None] * (w2 * np.eye(3) - np.outer(self.omega, self.omega))[None]
-        cols = state.frames.copy()                       # delta x_I = R_I du_I, or E_I dv_I on basis nodes
+        A = w2 * np.eye(3) - np.outer(self.omega, self.omega)
+        cols = state.frames.copy()                       # delta x_J = R_J du_J, or E_J dv_J on basis nodes
         cols[m.has_basis] = m.basis[m.has_basis]
-        trans = np.einsum("nij,njk,nkl->nil", self._row_maps(), Kx, cols)
-        rot = director_spin_moment_tangent(inertia.rotary, state.frames, self.omega)
+        S = bm.scalar.tocoo()                            # blocks S_IJ E_I^T A R_J, one per entry (I, J) of S
+        I, J = S.row, S.col
+        trans = S.data[:, None, None] * np.einsum("nij,jk,nkl->nil", self._row_maps()[I], A, cols[J])
+        rot = director_spin_moment_tangent(bm.rotary, state.frames, self.omega)
+        nodes = np.arange(m.body.n_nodes)
         rows, colidx, vals = [], [], []
-        for block, first in ((trans, 0), (rot, 3)):
+        for block, first, I, J in ((trans, 0, I, J), (rot, 3, nodes, nodes)):
             k = block.shape[1]
-            idx = self._index[:, first:first + k]                          # (n, k)
-            r = np.repeat(idx[:, :, None], k, axis=2)
-            c = np.repeat(idx[:, None, :], k, axis=1)
+            r = np.repeat(self._index[I, first:first + k][:, :, None], k, axis=2)
+            c = np.repeat(self._index[J, first:first + k][:, None, :], k, axis=1)
             keep = (r >= 0) & (c >= 0)
             rows.append(r[keep]), colidx.append(c[keep]), vals.append(block[keep])
         return sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(colidx))),

@@ -270,10 +270,10 @@ def _configuration(dyn, q_n, x: np.ndarray, t: float):
 class GeneralizedAlpha:
     """The integrator with its iteration matrix, factorization and counters (reused across steps).
 
-    ``dyn`` supplies ``mass`` (n,), ``residual(q, v, vdot, t)``, ``residual_and_tangent(q, v, vdot, t)``,
-    ``update(q, dq)``, ``dof_scale``, optionally ``damping_matrix(q)`` and ``damping_force(q, v)``, and,
-    for the outputs, ``kinetic_energy``, ``strain_energy``, ``gravity_potential``, ``momenta`` (see
-    :class:`flexbody.dynamics.DynamicModel`).
+    ``dyn`` supplies ``mass_matrix()`` (sparse, n x n; or a diagonal ``mass`` (n,)), ``residual(q, v, vdot, t)``,
+    ``residual_and_tangent(q, v, vdot, t)``, ``update(q, dq)``, ``dof_scale``, optionally ``damping_matrix(q)``
+    and ``damping_force(q, v)``, and, for the outputs, ``kinetic_energy``, ``strain_energy``,
+    ``gravity_potential``, ``momenta`` (see :class:`flexbody.dynamics.DynamicModel`).
     """
 
     def __init__(self, dyn, h: float, settings: AlphaSettings | None = None,
@@ -291,7 +291,7 @@ class GeneralizedAlpha:
         r, K = self.dyn.residual_and_tangent(step.state, step.v, step.vdot, t)
         self.stats.tangent_updates += 1
         self.stats.residual_evaluations += 1
-        S = K + sp.diags(self.dyn.mass * self.params.beta_prime(self.h))
+        S = K + _mass_matrix(self.dyn) * self.params.beta_prime(self.h)
         C = self.dyn.damping_matrix(step.state) if hasattr(self.dyn, "damping_matrix") else None
         if C is not None:
             S = S + self.params.gamma_prime(self.h) * C
@@ -403,6 +403,11 @@ def _record(dyn, index: int, t: float, state, v: np.ndarray, iterations: int, re
 def _damping_force(dyn, state, v: np.ndarray) -> np.ndarray:
     """f_d(q, v) (0 for a model without ``damping_force``)."""
     return dyn.damping_force(state, v) if hasattr(dyn, "damping_force") else np.zeros_like(v)
+
+
+def _mass_matrix(dyn) -> sp.spmatrix:
+    """The constant mass matrix M: ``dyn.mass_matrix()`` (sparse: lumped or consistent), or diag(``dyn.mass``)."""
+    return dyn.mass_matrix() if hasattr(dyn, "mass_matrix") else sp.diags(dyn.mass)
 
 
 class _StepFailure(RuntimeError):
@@ -610,7 +615,8 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
         its step ``first_step``: vdot and a there (default: consistent, a = vdot), the step numbers and the
         record_every grid counted on from it, and the work D dissipated until then
 
-    The initial acceleration is consistent (vdot_0 = -M^-1 g(q_0, t_0), a_0 = vdot_0), which the second
+    The initial acceleration is consistent (vdot_0 = -M^-1 g(q_0, t_0) from ``dyn.initial_acceleration``, a
+    sparse solve for a consistent mass; a_0 = vdot_0), which the second
     order of the method requires (BCA; Arnold & Bruls 2007). Fixed step: a step that does not converge is
     retried as two half steps, down to ``settings.max_cutbacks`` levels (default 0); a step's record then
     sums the sub-steps' iterations and histories (``substeps`` > 1, ``rejected_newton`` the failed tries).

@@ -1411,8 +1411,8 @@ class ShellODE2:
     start of a step and off by O(|dtheta|) inside it, so Newton converges to the same solution, a little
     slower than quadratically.
 
-    Dynamics: with ``mass`` (the constant lumped mass on the free DoFs, ``flexbody.dynamics.DynamicModel``'s
-    ``mass``; in these coordinates there are no gyroscopic or centrifugal terms) exudyn's implicit
+    Dynamics: with ``mass`` (the constant mass on the free DoFs, ``flexbody.dynamics.DynamicModel.mass_matrix()``,
+    lumped or consistent; in these coordinates there are no gyroscopic or centrifugal terms) exudyn's implicit
     integrators run the shell; the velocities q_t are taken as the DoF velocities (fixed-direction
     translation rates, local angular velocities w_1, w_2), committed with the frames at every step.
     Without ``mass`` the mass matrix is zero: statics only.
@@ -1422,7 +1422,8 @@ class ShellODE2:
     mbs : the exudyn MainSystem to add the node and object to
     model : the flexbody model; its loads are scaled by the load factor ``load_factor(t)``
     load_factor : lambda(t) of exudyn's (pseudo-)time; default lambda = t (static solver: t runs 0 to 1)
-    mass : (n_dof,) diagonal mass matrix on the free DoFs, or None (statics)
+    mass : the mass matrix on the free DoFs, (n_dof,) diagonal entries or a sparse (n_dof, n_dof) matrix
+        (``DynamicModel.mass_matrix()``, lumped or consistent), or None (statics)
     velocity : (n_dof,) initial velocity (e.g. ``DynamicModel.rigid_velocity``), or None (at rest)
     on_commit : called as ``on_commit(t, state)`` with every committed state and its (pseudo-)time
     """
@@ -1442,6 +1443,10 @@ class ShellODE2:
         mass_matrix = exu.MatrixContainer()
         if mass is None:
             mass_matrix.SetWithSparseMatrixCSR(n, n, [], useDenseMatrix=False)
+        elif sparse.issparse(mass):
+            if mass.shape != (n, n) or np.any(mass.diagonal() <= 0):
+                raise ValueError(f"mass must be an ({n}, {n}) matrix with a positive diagonal, got shape {mass.shape}")
+            mass_matrix.SetWithSparseMatrix(sparse.csr_matrix(mass))
         else:
             mass = np.asarray(mass, float)
             if mass.shape != (n,) or np.any(mass <= 0):
@@ -1641,7 +1646,7 @@ def hub_driven_membrane_in_exudyn(params: dict | None = None, flexbody_alone: bo
         for o in scene.outputs:
             history[o.name].append(o.value(free_model, state))
 
-    shell = ShellODE2(mbs, free_model, lambda t: 0.0, mass=dyn.mass, on_commit=record)
+    shell = ShellODE2(mbs, free_model, lambda t: 0.0, mass=dyn.mass_matrix(), on_commit=record)
 
     # the hub: a rigid body on a revolute joint (z) to ground, its rotation coordinate driven
     from exudyn.utilities import RigidBodyInertia

@@ -24,11 +24,12 @@ def load_level(scene, where: float):
 
 
 def gravity_forces(scene) -> np.ndarray | None:
-    """The nodal gravity forces m_I g (n, 3) of a dynamic scene with gravity (None otherwise)."""
+    """The nodal gravity forces s_I g (n, 3) of a dynamic scene with gravity (None otherwise): s_I the row
+    sums of the scene's mass matrix, lumped (m_I) or consistent (int rho h N_I dA), with its point masses."""
     if scene.kind != "dynamic" or not np.any(np.asarray(scene.analysis.gravity, dtype=float)):
         return None
-    from flexbody.shell.inertia import nodal_inertia, with_point_masses
-    mass = with_point_masses(nodal_inertia(scene.model.body), list(scene.analysis.point_masses)).mass
+    from flexbody.shell.inertia import shell_mass
+    mass = shell_mass(scene.model.body, scene.analysis.mass, list(scene.analysis.point_masses)).nodal
     return mass[:, None] * np.asarray(scene.analysis.gravity, dtype=float)
 
 

@@ -383,6 +383,7 @@ class DynamicRunSummary:
             "converged": self.result.converged, "message": self.result.message, "time": float(self.result.time),
             "end_time": a.end_time, "time_step": a.end_time / a.n_steps, "rho_inf": a.rho_inf, "policy": a.policy,
             "time_steps": self.step_summary(),
+            "mass": a.mass,
             "outputs": {k: v[-1] for k, v in self.history.items() if k != "time" and v},
             "errors": self.errors, "max_rel_error": self.max_rel_error,
             "energy": self.energy_summary(), "momentum": self.momentum_summary(),
@@ -460,7 +461,7 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
 
     model, a = scene.model, scene.analysis
     dyn = DynamicModel(model, gravity=a.gravity, load_factor=a.load_factor, prescribed=list(a.prescribed),
-                       point_masses=list(a.point_masses), damping=a.damping)
+                       point_masses=list(a.point_masses), damping=a.damping, mass=a.mass)
     state, v0 = initial_conditions(dyn, a)
     history: dict[str, list[float]] = {"time": [], **{o.name: [] for o in scene.outputs}}
     energies: dict[str, list] = {k: [] for k in ("time", *ENERGY_KEYS, "linear_momentum", "angular_momentum")}

@@ -186,12 +186,14 @@ class DynamicAnalysis:
         2-core machine, 100 steps of the 64-element membrane take 0.34 s on one thread and 2.1 s on two,
         20 steps of 1152 elements 0.72 s and 1.37 s), numba's default otherwise
     point_masses : tip masses and rotary inertias at nodes (:class:`flexbody.shell.inertia.PointMass`),
-        added to the shell's lumped inertia
+        added to the shell's inertia
     adaptive : error-controlled time steps (True), the fixed step (False), or None: the ``settings``' choice
         (fixed by default). Adaptive: ``time_step`` is the first step and the unit of the output times (every
         ``output_every``-th multiple of it, where the steps land), no step is longer than the output interval,
         and the tolerance and step limits are ``settings.error_tolerance``, ``min_step``, ``max_step``
         (docs/dynamics.md, "Adaptive time steps")
+    mass : the mass matrix, "lumped" (HRZ, diagonal; default) or "consistent" (translations
+        int rho h N_I N_J dA, director inertia lumped): ``flexbody.dynamics.DynamicModel(mass=...)``
 
     Compared by identity (it holds arrays and functions).
     """
@@ -216,6 +218,7 @@ class DynamicAnalysis:
     point_masses: tuple = ()
     damping: object | None = None
     adaptive: bool | None = None
+    mass: str = "lumped"
 
     def __post_init__(self) -> None:
         for name in ("time_step", "end_time"):
@@ -244,6 +247,8 @@ class DynamicAnalysis:
         from flexbody.dynamics import RayleighDamping
         if self.damping is not None and not isinstance(self.damping, RayleighDamping):
             raise ValueError(f"damping must be a RayleighDamping or None, got {type(self.damping).__name__}")
+        from flexbody.shell.inertia import check_mass_kind
+        check_mass_kind(self.mass)
 
     @property
     def n_steps(self) -> int:

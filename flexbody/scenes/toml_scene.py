@@ -24,6 +24,7 @@ In short (every table but ``[mesh]``, ``[material]`` and one ``[[output]]`` is o
                            max_step, safety, ... (dynamic)
     [analysis.damping]     alpha_mass (1/s) and/or beta_stiffness (s), or ratio + frequencies_hz = [f1, f2]:
                            Rayleigh damping (dynamic)
+                           [analysis] mass = "lumped" (default) | "consistent": the mass matrix (dynamic)
     [[output]]             name, a node selection of one node, component or direction, scale; or
                            type = "radial" (mean radial displacement of nodes) | "angular_velocity"
     [reference]            file = "ref.csv", load_factor (or time) = column, columns = {output = column}
@@ -81,7 +82,7 @@ _ANALYSIS_KEYS = ("method", "steps", "max_load_factor", "load_factors", "arc_inc
                   "max_steps", "min_increment_ratio", "max_increment_ratio", "desired_iterations", "newton",
                   "stability")
 _DYNAMIC_KEYS = ("type", "dt", "end_time", "rho_inf", "policy", "output_every", "gravity", "load_ramp_time",
-                 "initial", "hub", "integrator", "damping", "adaptive")
+                 "initial", "hub", "integrator", "damping", "adaptive", "mass")
 _DAMPING_KEYS = ("alpha_mass", "beta_stiffness", "ratio", "frequencies_hz")
 _OUTPUT_TYPES = ("displacement", "radial", "angular_velocity")
 _ELEMENT_KEYS = ("tying", "kernel")
@@ -554,10 +555,10 @@ def _build_damping(t: _Table):
     return _wrap(t.where, t.path, RayleighDamping.from_ratio, ratio, tuple(freqs))
 
 
-def _centre_of_mass(body, point_masses=()) -> np.ndarray:
-    from flexbody.shell.inertia import nodal_inertia, with_point_masses
-    m = with_point_masses(nodal_inertia(body), point_masses).mass
-    return (m @ body.mesh.nodes) / m.sum()
+def _centre_of_mass(body, point_masses=(), mass: str = "lumped") -> np.ndarray:
+    """The mass centre of the discrete body with its mass matrix (``mass``: "lumped" or "consistent")."""
+    from flexbody.shell.inertia import shell_mass
+    return shell_mass(body, mass, point_masses).centre(body.mesh.nodes)
 
 
 def _hub_nodes(doc_analysis: Any, mesh, where: str) -> np.ndarray | None:
@@ -722,7 +723,8 @@ def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None, load_
     if load_functions:
         load_factor = GroupFactors((load_factor or constant, *load_functions))
     settings = _build_integrator(t.table("integrator") if t.has("integrator") else None)
-    kwargs: dict[str, Any] = {"point_masses": tuple(point_masses), "adaptive": adaptive}
+    mass = t.string("mass", "lumped", choices=("lumped", "consistent"))
+    kwargs: dict[str, Any] = {"point_masses": tuple(point_masses), "adaptive": adaptive, "mass": mass}
     if t.has("damping"):
         kwargs["damping"] = _build_damping(t.table("damping"))
     if t.has("initial"):
@@ -730,7 +732,7 @@ def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None, load_
         start = it.string("state", "reference", choices=("reference", "steady_spin"))
         omega = it.vector("angular_velocity", [0.0, 0.0, 0.0])
         velocity = it.vector("velocity", [0.0, 0.0, 0.0])
-        center = it.vector("center") if it.has("center") else _centre_of_mass(body, point_masses)
+        center = it.vector("center") if it.has("center") else _centre_of_mass(body, point_masses, mass)
         kick = _velocity_fields(it, body.mesh.nodes)
         it.done(["state", "velocity", "angular_velocity", "center", "velocity_field"])
         if start == "steady_spin":

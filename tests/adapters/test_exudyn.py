@@ -340,7 +340,7 @@ def test_exudyn_generalized_alpha_on_the_wrapped_shell_equals_ours():
 
     theirs = {}
     mbs = exu.SystemContainer().AddSystem()
-    shell = fx.ShellODE2(mbs, model, lambda t: 0.1, mass=dyn.mass,
+    shell = fx.ShellODE2(mbs, model, lambda t: 0.1, mass=dyn.mass_matrix(),
                          on_commit=lambda t, state: theirs.__setitem__(round(t, 9), tip.value(model, state)))
     _dynamic_exudyn_run(mbs, shell, t_end, h)
     theirs[round(t_end, 9)] = tip.value(model, shell.state(shell.coordinates()))
@@ -374,7 +374,7 @@ def test_stiff_free_shell_tumbles_like_an_exudyn_rigid_body():
     corner = mesh.nearest_node([2.0, 1.0, 0.0])
 
     mbs = exu.SystemContainer().AddSystem()
-    shell = fx.ShellODE2(mbs, model, lambda t: 0.0, mass=dyn.mass,
+    shell = fx.ShellODE2(mbs, model, lambda t: 0.0, mass=dyn.mass_matrix(),
                          velocity=dyn.rigid_velocity(start, omega, center=centre))
     rigid = mbs.CreateRigidBody(referencePosition=list(centre), initialAngularVelocity=list(omega),
                                 inertia=RigidBodyInertia(mass=dyn.inertia.total_mass, inertiaTensor=inertia,

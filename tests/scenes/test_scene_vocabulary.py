@@ -69,12 +69,12 @@ def test_two_load_groups_with_their_own_factors_residual_and_exact_tangent():
     v = np.zeros(dyn.n_dof)                          # undamped: the velocity does not enter
     alone = [Model(base.body, base.constraints, [ld for ld, g in zip(loads, groups) if g == k]) for k in (0, 1)]
     internal = Model(base.body, base.constraints, []).residual(state, 0.0)
-    expected = dyn.mass * vdot + sum(m.residual(state, lam[k]) - internal for k, m in enumerate(alone)) + internal
+    expected = dyn.mass_matrix() @ vdot + sum(m.residual(state, lam[k]) - internal for k, m in enumerate(alone)) + internal
     r, K = dyn.residual_and_tangent(state, v, vdot, t)
     assert np.abs(r - expected).max() < 1e-12 * np.abs(expected).max()
     assert np.abs(r - dyn.residual(state, v, vdot, t)).max() < 1e-12 * np.abs(r).max()
     # against one shared factor lambda_0 the difference is (lambda_0 - lambda_1) f_ext,1: the groups have their own
-    shared = dyn.mass * vdot + model.residual(state, lam[0])
+    shared = dyn.mass_matrix() @ vdot + model.residual(state, lam[0])
     f1 = alone[1].external_force(state)
     assert np.abs(r - shared - (lam[0] - lam[1]) * f1).max() < 1e-12 * np.abs(r).max()
     assert abs(lam[0] - lam[1]) * np.abs(f1).max() > 1e-4 * np.abs(r).max()
