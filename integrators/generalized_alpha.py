@@ -215,6 +215,8 @@ class GeneralizedAlpha:
     #: steps start with it instead of failing twice first on kept matrices. Measured on the 10 m sail under its
     #: rim pulse (30 steps; factorizations per step): 0 -> 17.8, 5 -> 7.1, 20 -> 5.4.
     NEWTON_HOLD_STEPS = 20
+    #: the smallest damping factor lambda of a Newton correction before the try fails
+    MIN_DAMPING = 1.0 / 64.0
 
     def __init__(self, dyn, h: float, settings: AlphaSettings | None = None,
                  stats: NewtonStats | None = None) -> None:
@@ -277,68 +279,105 @@ class GeneralizedAlpha:
             raise _StepFailure(out[1])
         return out[:-1]
 
+    def _corrected(self, base: _Step, dx: np.ndarray, q_n, t: float) -> _Step:
+        """The iterate base + dx: x, v, vdot and a by the linearised formulas (beta', gamma'), the configuration
+        exactly, q_{n+1} = q_n o exp(x)."""
+        p, h = self.params, self.h
+        bp, gp = p.beta_prime(h), p.gamma_prime(h)
+        x = base.x + dx
+        return _Step(_configuration(self.dyn, q_n, x, t), x, base.v + gp * dx, base.vdot + bp * dx,
+                     base.a + (1.0 - p.alpha_f) / (1.0 - p.alpha_m) * bp * dx)
+
     def _attempt(self, q_n, v_n, vdot_n, a_n, t_n: float, fresh: bool, newton: bool = False):
         """One try at the step: from the predictor, with a fresh matrix first if ``fresh``, and a fresh one at every
-        iteration if ``newton`` (or under the "full" policy)."""
+        iteration if ``newton`` (or under the "full" policy).
+
+        A correction made with a matrix fresh at its iterate (a Newton step) is damped (x <- x + lambda dx) until it
+        passes the natural monotonicity test ||dx_bar||_w <= (1 - lambda / 4) ||dx||_w, dx_bar the correction that
+        the same matrix gives at the new iterate (Deuflhard, Newton Methods for Nonlinear Problems, 2004, 3.3:
+        affine invariant, so scale-free like the rest; the test costs nothing in the modified iteration, whose next
+        correction is dx_bar, and one solve before each refresh otherwise).
+        """
         h, p, s, dyn = self.h, self.params, self.settings, self.dyn
         t = t_n + h
-        bp, gp = p.beta_prime(h), p.gamma_prime(h)
         step = _predict(q_n, v_n, vdot_n, a_n, h, p, lambda q, x: _configuration(dyn, q, x, t))
         residuals, corrections, refreshes = [], [], 0
         any_fresh, need, prev = fresh, fresh, None
-        eta = np.inf                              # no contraction estimate before the second correction
-        for k in range(s.max_iterations):
-            used_fresh = need
+        newton_step = None     # (iterate, dx, lambda, ||dx||_w) of the last correction if made with a fresh matrix
+        eta = np.inf           # no contraction estimate before the second correction
+        k = 0
+        while k < s.max_iterations:
+            used_fresh = False
             try:
-                if need:
+                if need and newton_step is None:
                     r = self._refresh(step, t)
                     refreshes += 1
-                    any_fresh, need = True, False
+                    any_fresh, need, used_fresh = True, False, True
                 else:
                     r = dyn.residual(step.state, step.v, step.vdot, t)
                     self.stats.residual_evaluations += 1
                 dx = self._solve(step.state, r)
+                err = weighted_rms(dx, step.x, dyn.dof_scale, s)
+                if newton_step is not None:              # the natural monotonicity test of the last Newton step
+                    base, dx_n, lam, err_n = newton_step
+                    if not (err <= (1.0 - 0.25 * lam) * err_n):
+                        lam *= 0.5
+                        if lam < self.MIN_DAMPING:
+                            return None, (f"damped Newton: no decrease down to lambda = {2 * lam:g} (corrections "
+                                          f"{[f'{c:.2e}' for c in corrections]})"), any_fresh
+                        step = self._corrected(base, lam * dx_n, q_n, t)
+                        newton_step = base, dx_n, lam, err_n
+                        corrections[-1] = lam * err_n
+                        continue
+                    newton_step = None
+                    if lam < 1.0:                        # a damped step: no contraction estimate, Newton again
+                        need, prev, eta = True, None, np.inf
+                    if need:                             # refresh here: the Newton correction of this iterate
+                        r = self._refresh(step, t)
+                        refreshes += 1
+                        any_fresh, need, used_fresh = True, False, True
+                        dx = self._solve(step.state, r)
+                        err = weighted_rms(dx, step.x, dyn.dof_scale, s)
             except (FloatingPointError, SingularMatrixError) as exc:
                 return None, str(exc), any_fresh
-            residuals.append(float(np.linalg.norm(r)))
-            before = dataclasses.replace(step)
-            # Newton correction of x = h dq_n, of the velocity and of the accelerations (beta', gamma')
-            step.x = step.x + dx
-            step.v = step.v + gp * dx
-            step.vdot = step.vdot + bp * dx
-            step.a = step.a + (1.0 - p.alpha_f) / (1.0 - p.alpha_m) * bp * dx
-            try:
-                step.state = _configuration(dyn, q_n, step.x, t)   # exact: q_{n+1} = q_n o exp(h dq_n)
-            except FloatingPointError as exc:
-                return None, str(exc), any_fresh
-            self.stats.iterations += 1
-            err = weighted_rms(dx, step.x, dyn.dof_scale, s)
-            corrections.append(err)
             if not np.isfinite(err):
                 return None, "non-finite correction", any_fresh
-            if err == 0.0:
-                return step, k + 1, residuals, corrections, refreshes, any_fresh
+            residuals.append(float(np.linalg.norm(r)))
             if prev is not None:
                 theta = err / prev
-                if theta >= 1.0 and not used_fresh:      # an old matrix made it worse: undo, refresh, redo
-                    step = before
+                if theta >= 1.0 and not used_fresh:      # the last correction, from an old matrix, did not decrease
+                    step = before                        # the next one: undo it, refresh where it was made, redo
                     corrections.pop()
-                    need = True
+                    del residuals[-2:]                   # this iterate's and the undone correction's
+                    need, prev = True, (corrections[-1] if corrections else None)
                     continue
+                if theta >= 1.0 and err > s.divergence_factor * corrections[0]:
+                    return None, f"diverging corrections {[f'{c:.2e}' for c in corrections]}", any_fresh
+            before = step
+            try:
+                step = self._corrected(step, dx, q_n, t)   # exact: q_{n+1} = q_n o exp(h dq_n)
+            except FloatingPointError as exc:
+                return None, str(exc), any_fresh
+            k += 1
+            self.stats.iterations += 1
+            corrections.append(err)
+            if err == 0.0:
+                return step, k, residuals, corrections, refreshes, any_fresh
+            if used_fresh:
+                newton_step = before, dx, 1.0, err
+            if prev is not None:
+                theta = err / prev
                 if theta >= 1.0:                         # not contracting: Newton steps with fresh matrices
-                    if err > s.divergence_factor * corrections[0]:
-                        return None, (f"diverging corrections {[f'{c:.2e}' for c in corrections]}"), any_fresh
                     need, prev = True, err
                     continue
                 eta = theta / (1.0 - theta)
                 need = theta > s.refresh_ratio
             need = need or newton or s.policy == "full"
             if eta * err <= 1.0:
-                return step, k + 1, residuals, corrections, refreshes, any_fresh
+                return step, k, residuals, corrections, refreshes, any_fresh
             prev = err
         return None, (f"no convergence in {s.max_iterations} iterations (corrections "
                       f"{[f'{c:.2e}' for c in corrections]})"), any_fresh
-
 
 
 def _record(dyn, index: int, t: float, state, v: np.ndarray, iterations: int, residuals, corrections,
