@@ -187,28 +187,13 @@ def weighted_rms(dx: np.ndarray, x: np.ndarray, scale, settings: AlphaSettings) 
     return float(np.sqrt(np.mean((dx / w) ** 2))) if dx.size else 0.0
 
 
-def _predict(q_n, v_n, vdot_n, a_n, h: float, p: AlphaParameters, update: Callable,
-             x_guess: np.ndarray | None = None) -> _Step:
-    """Predictor: the integration formulas evaluated at vdot_{n+1} = vdot_n, or, given a guess of the increment
-    x = h dq_n, at that increment (with the accelerations the formulas give for it,
-    :func:`kinematics_of_increment`)."""
-    if x_guess is None:
-        vdot = vdot_n.copy()
-        a = (p.alpha_f * vdot_n - p.alpha_m * a_n + (1.0 - p.alpha_f) * vdot) / (1.0 - p.alpha_m)
-        x = h * v_n + h * h * ((0.5 - p.beta) * a_n + p.beta * a)
-    else:
-        x = x_guess
-        a, vdot = kinematics_of_increment(x, v_n, vdot_n, a_n, h, p)
+def _predict(q_n, v_n, vdot_n, a_n, h: float, p: AlphaParameters, update: Callable) -> _Step:
+    """Predictor with vdot_{n+1} = vdot_n (the integration formulas evaluated at that acceleration)."""
+    vdot = vdot_n.copy()
+    a = (p.alpha_f * vdot_n - p.alpha_m * a_n + (1.0 - p.alpha_f) * vdot) / (1.0 - p.alpha_m)
+    x = h * v_n + h * h * ((0.5 - p.beta) * a_n + p.beta * a)
     v = v_n + h * ((1.0 - p.gamma) * a_n + p.gamma * a)
     return _Step(update(q_n, x), x, v, vdot, a)
-
-
-def kinematics_of_increment(x: np.ndarray, v_n, vdot_n, a_n, h: float, p: AlphaParameters):
-    """(a_{n+1}, vdot_{n+1}) for which the integration formulas give the increment x = h dq_n (their inverse):
-    a = (x - h v_n - h^2 (1/2 - beta) a_n) / (h^2 beta), vdot = ((1 - alpha_m) a + alpha_m a_n - alpha_f vdot_n)
-    / (1 - alpha_f)."""
-    a = (x - h * v_n - h * h * (0.5 - p.beta) * a_n) / (h * h * p.beta)
-    return a, ((1.0 - p.alpha_m) * a + p.alpha_m * a_n - p.alpha_f * vdot_n) / (1.0 - p.alpha_f)
 
 
 def _configuration(dyn, q_n, x: np.ndarray, t: float):
@@ -243,24 +228,6 @@ class GeneralizedAlpha:
         self.solver = LinearSolver()
         self.stats = NewtonStats() if stats is None else stats
         self._newton_steps = 0    # steps left to start with Newton's method (after a step that needed it)
-        self._last = None         # (t_{n+1}, q_n, vdot_{n+1}, x) of the last converged step, for the predictor
-
-    def _acceleration_guess(self, q_n, vdot_n: np.ndarray, t_n: float) -> np.ndarray | None:
-        """vdot_{n+1} ~ P vdot_n: the accelerations turned with the body by the rigid rotation P of the last step
-        (``dyn.transfer`` from q_{n-1} to q_n), or None (vdot_n) without ``transfer`` or a last step to continue.
-
-        A spinning body's accelerations turn with it: at a constant rate omega, vdot_n itself is off by
-        omega h |vdot| in the fixed directions of the translations, which puts an error h^2 beta omega h |vdot| on
-        the predicted increment; a stiff membrane turns it into stresses far above the spin's own (the 10 m sail:
-        3.7e-4 m against strains of 5e-7).
-        """
-        dyn, last = self.dyn, self._last
-        if not (self.settings.rotate_matrix and hasattr(dyn, "transfer") and last is not None):
-            return None
-        t_last, q_prev, vdot_last, x_last = last
-        if not (abs(t_last - t_n) <= 1e-12 * max(abs(t_n), self.h) and np.array_equal(vdot_last, vdot_n)):
-            return None
-        return dyn.apply_transfer(x_last, dyn.transfer(q_prev, q_n))
 
     def _refresh(self, step: _Step, t: float):
         """New tangent at the iterate, S = M beta' + C_t gamma' + K_t (T ~ I), factorized; returns the residual."""
@@ -296,7 +263,6 @@ class GeneralizedAlpha:
             self._newton_steps -= 1
             out = self._attempt(q_n, v_n, vdot_n, a_n, t_n, fresh=True, newton=True)
             if out[0] is not None:
-                self._last = (t_n + self.h, q_n, out[0].vdot, out[0].x)
                 return out[:-1]
             self._newton_steps = 0                      # then the usual tries below
         out = self._attempt(q_n, v_n, vdot_n, a_n, t_n, fresh=self.settings.policy == "full" or not self.solver.ready)
@@ -311,7 +277,6 @@ class GeneralizedAlpha:
         if out[0] is None:
             self.solver = LinearSolver()  # the failed attempt's matrix belongs to a wild iterate: never reuse it
             raise _StepFailure(out[1])
-        self._last = (t_n + self.h, q_n, out[0].vdot, out[0].x)
         return out[:-1]
 
     def _corrected(self, base: _Step, dx: np.ndarray, q_n, t: float) -> _Step:
@@ -335,8 +300,7 @@ class GeneralizedAlpha:
         """
         h, p, s, dyn = self.h, self.params, self.settings, self.dyn
         t = t_n + h
-        step = _predict(q_n, v_n, vdot_n, a_n, h, p, lambda q, x: _configuration(dyn, q, x, t),
-                        self._acceleration_guess(q_n, vdot_n, t_n))
+        step = _predict(q_n, v_n, vdot_n, a_n, h, p, lambda q, x: _configuration(dyn, q, x, t))
         residuals, corrections, refreshes = [], [], 0
         any_fresh, need, prev = fresh, fresh, None
         newton_step = None     # (iterate, dx, lambda, ||dx||_w) of the last correction if made with a fresh matrix
