@@ -43,9 +43,7 @@ an older one (measured: 17x larger angular-velocity error in the tumbling-plate 
 matrix and its factorization are kept across iterations and steps ("modified" policy) and refreshed when
 theta_k > ``refresh_ratio`` or the iteration diverges; a step that fails with an old matrix is retried
 once with a fresh one, and a step that fails under the "modified" policy once more with a fresh matrix at
-every iteration (Newton's method); after such a step the next ``NEWTON_HOLD_STEPS`` steps start with Newton's
-method (a slack membrane that needed it once needs it on the following steps too: the 10 m sail under its rim
-pulse otherwise fails twice on kept matrices at every step).
+every iteration (Newton's method).
 The translational DoFs are components in fixed directions, so a tumbling body's stiffness turns with it,
 and the parallel-transported frames drift about their directors relative to the body: K -> P K P^T.
 With ``rotate_matrix`` an old factorization is applied through P from the configuration where it was made
@@ -211,13 +209,6 @@ class GeneralizedAlpha:
     :class:`flexbody.dynamics.DynamicModel`).
     """
 
-    #: after a step that converged only with Newton's method (the third try of :meth:`step`), the next this many
-    #: steps start with it instead of failing twice first on kept matrices. Measured on the 10 m sail under its
-    #: rim pulse (30 steps; factorizations per step): 0 -> 17.8, 5 -> 7.1, 20 -> 5.4.
-    NEWTON_HOLD_STEPS = 20
-    #: the smallest damping factor lambda of a Newton correction before the try fails
-    MIN_DAMPING = 1.0 / 64.0
-
     def __init__(self, dyn, h: float, settings: AlphaSettings | None = None,
                  stats: NewtonStats | None = None) -> None:
         if not (np.isfinite(h) and h > 0):
@@ -227,7 +218,6 @@ class GeneralizedAlpha:
         self.params = AlphaParameters.from_rho_inf(self.settings.rho_inf)
         self.solver = LinearSolver()
         self.stats = NewtonStats() if stats is None else stats
-        self._newton_steps = 0    # steps left to start with Newton's method (after a step that needed it)
 
     def _refresh(self, step: _Step, t: float):
         """New tangent at the iterate, S = M beta' + C_t gamma' + K_t (T ~ I), factorized; returns the residual."""
@@ -258,13 +248,6 @@ class GeneralizedAlpha:
 
     def step(self, q_n, v_n, vdot_n, a_n, t_n: float):
         """One step from t_n; returns (_Step, iterations, residuals, corrections, refreshes) or raises."""
-        if self._newton_steps > 0 and self.settings.policy == "modified":
-            # a recent step failed on kept matrices and converged only with Newton's method: start with it
-            self._newton_steps -= 1
-            out = self._attempt(q_n, v_n, vdot_n, a_n, t_n, fresh=True, newton=True)
-            if out[0] is not None:
-                return out[:-1]
-            self._newton_steps = 0                      # then the usual tries below
         out = self._attempt(q_n, v_n, vdot_n, a_n, t_n, fresh=self.settings.policy == "full" or not self.solver.ready)
         if out[0] is None and not out[-1]:   # failed with an old matrix: retry with a fresh one
             out = self._attempt(q_n, v_n, vdot_n, a_n, t_n, fresh=True)
@@ -273,115 +256,73 @@ class GeneralizedAlpha:
             # membrane that tautens within a step changes its stiffness faster than the kept matrices follow
             # (a 10 m sail under a rim pulse: 20 iterations short of convergence at step 6, 4 with Newton)
             out = self._attempt(q_n, v_n, vdot_n, a_n, t_n, fresh=True, newton=True)
-            self._newton_steps = self.NEWTON_HOLD_STEPS
         if out[0] is None:
             self.solver = LinearSolver()  # the failed attempt's matrix belongs to a wild iterate: never reuse it
             raise _StepFailure(out[1])
         return out[:-1]
 
-    def _corrected(self, base: _Step, dx: np.ndarray, q_n, t: float) -> _Step:
-        """The iterate base + dx: x, v, vdot and a by the linearised formulas (beta', gamma'), the configuration
-        exactly, q_{n+1} = q_n o exp(x)."""
-        p, h = self.params, self.h
-        bp, gp = p.beta_prime(h), p.gamma_prime(h)
-        x = base.x + dx
-        return _Step(_configuration(self.dyn, q_n, x, t), x, base.v + gp * dx, base.vdot + bp * dx,
-                     base.a + (1.0 - p.alpha_f) / (1.0 - p.alpha_m) * bp * dx)
-
     def _attempt(self, q_n, v_n, vdot_n, a_n, t_n: float, fresh: bool, newton: bool = False):
         """One try at the step: from the predictor, with a fresh matrix first if ``fresh``, and a fresh one at every
-        iteration if ``newton`` (or under the "full" policy).
-
-        A correction made with a matrix fresh at its iterate (a Newton step) is damped (x <- x + lambda dx) until it
-        passes the natural monotonicity test ||dx_bar||_w <= (1 - lambda / 4) ||dx||_w, dx_bar the correction that
-        the same matrix gives at the new iterate (Deuflhard, Newton Methods for Nonlinear Problems, 2004, 3.3:
-        affine invariant, so scale-free like the rest; the test costs nothing in the modified iteration, whose next
-        correction is dx_bar, and one solve before each refresh otherwise).
-        """
+        iteration if ``newton`` (or under the "full" policy)."""
         h, p, s, dyn = self.h, self.params, self.settings, self.dyn
         t = t_n + h
+        bp, gp = p.beta_prime(h), p.gamma_prime(h)
         step = _predict(q_n, v_n, vdot_n, a_n, h, p, lambda q, x: _configuration(dyn, q, x, t))
         residuals, corrections, refreshes = [], [], 0
         any_fresh, need, prev = fresh, fresh, None
-        newton_step = None     # (iterate, dx, lambda, ||dx||_w) of the last correction if made with a fresh matrix
-        eta = np.inf           # no contraction estimate before the second correction
-        k = 0
-        while k < s.max_iterations:
-            used_fresh = False
+        eta = np.inf                              # no contraction estimate before the second correction
+        for k in range(s.max_iterations):
+            used_fresh = need
             try:
-                if need and newton_step is None:
+                if need:
                     r = self._refresh(step, t)
                     refreshes += 1
-                    any_fresh, need, used_fresh = True, False, True
+                    any_fresh, need = True, False
                 else:
                     r = dyn.residual(step.state, step.v, step.vdot, t)
                     self.stats.residual_evaluations += 1
                 dx = self._solve(step.state, r)
-                err = weighted_rms(dx, step.x, dyn.dof_scale, s)
-                if newton_step is not None:              # the natural monotonicity test of the last Newton step
-                    base, dx_n, lam, err_n = newton_step
-                    if not (err <= (1.0 - 0.25 * lam) * err_n):
-                        lam *= 0.5
-                        if lam < self.MIN_DAMPING:
-                            # no decrease along the Newton direction (an indefinite tangent: a compressed
-                            # membrane): take the full step after all and go on with Newton's method
-                            lam = 1.0
-                        step = self._corrected(base, lam * dx_n, q_n, t)
-                        corrections[-1] = lam * err_n
-                        if lam < 1.0:
-                            newton_step = base, dx_n, lam, err_n
-                            continue
-                        newton_step, need, prev, eta = None, True, None, np.inf
-                        continue
-                    newton_step = None
-                    if lam < 1.0:                        # a damped step: no contraction estimate, Newton again
-                        need, prev, eta = True, None, np.inf
-                    if need:                             # refresh here: the Newton correction of this iterate
-                        r = self._refresh(step, t)
-                        refreshes += 1
-                        any_fresh, need, used_fresh = True, False, True
-                        dx = self._solve(step.state, r)
-                        err = weighted_rms(dx, step.x, dyn.dof_scale, s)
             except (FloatingPointError, SingularMatrixError) as exc:
                 return None, str(exc), any_fresh
-            if not np.isfinite(err):
-                return None, "non-finite correction", any_fresh
             residuals.append(float(np.linalg.norm(r)))
-            if prev is not None:
-                theta = err / prev
-                if theta >= 1.0 and not used_fresh:      # the last correction, from an old matrix, did not decrease
-                    step = before                        # the next one: undo it, refresh where it was made, redo
-                    corrections.pop()
-                    del residuals[-2:]                   # this iterate's and the undone correction's
-                    need, prev = True, (corrections[-1] if corrections else None)
-                    continue
-                if theta >= 1.0 and err > s.divergence_factor * corrections[0]:
-                    return None, f"diverging corrections {[f'{c:.2e}' for c in corrections]}", any_fresh
-            before = step
+            before = dataclasses.replace(step)
+            # Newton correction of x = h dq_n, of the velocity and of the accelerations (beta', gamma')
+            step.x = step.x + dx
+            step.v = step.v + gp * dx
+            step.vdot = step.vdot + bp * dx
+            step.a = step.a + (1.0 - p.alpha_f) / (1.0 - p.alpha_m) * bp * dx
             try:
-                step = self._corrected(step, dx, q_n, t)   # exact: q_{n+1} = q_n o exp(h dq_n)
+                step.state = _configuration(dyn, q_n, step.x, t)   # exact: q_{n+1} = q_n o exp(h dq_n)
             except FloatingPointError as exc:
                 return None, str(exc), any_fresh
-            k += 1
             self.stats.iterations += 1
+            err = weighted_rms(dx, step.x, dyn.dof_scale, s)
             corrections.append(err)
+            if not np.isfinite(err):
+                return None, "non-finite correction", any_fresh
             if err == 0.0:
-                return step, k, residuals, corrections, refreshes, any_fresh
-            if used_fresh:
-                newton_step = before, dx, 1.0, err
+                return step, k + 1, residuals, corrections, refreshes, any_fresh
             if prev is not None:
                 theta = err / prev
+                if theta >= 1.0 and not used_fresh:      # an old matrix made it worse: undo, refresh, redo
+                    step = before
+                    corrections.pop()
+                    need = True
+                    continue
                 if theta >= 1.0:                         # not contracting: Newton steps with fresh matrices
+                    if err > s.divergence_factor * corrections[0]:
+                        return None, (f"diverging corrections {[f'{c:.2e}' for c in corrections]}"), any_fresh
                     need, prev = True, err
                     continue
                 eta = theta / (1.0 - theta)
                 need = theta > s.refresh_ratio
             need = need or newton or s.policy == "full"
             if eta * err <= 1.0:
-                return step, k, residuals, corrections, refreshes, any_fresh
+                return step, k + 1, residuals, corrections, refreshes, any_fresh
             prev = err
         return None, (f"no convergence in {s.max_iterations} iterations (corrections "
                       f"{[f'{c:.2e}' for c in corrections]})"), any_fresh
+
 
 
 def _record(dyn, index: int, t: float, state, v: np.ndarray, iterations: int, residuals, corrections,

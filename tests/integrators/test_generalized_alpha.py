@@ -356,15 +356,14 @@ def test_a_failing_step_stops_with_a_report():
 
 
 def test_cutbacks_rescue_a_large_amplitude_step():
-    """Tip velocity 12 m/s (tip amplitude ~1.2 L) at h = T/40: plain Newton fails at step 10 (a thin shell's
+    """Tip velocity 8 m/s (tip amplitude ~0.8 L) at h = T/40: plain Newton fails at step 6 (a thin shell's
     bending step leaves a large membrane residual); with cut-backs the failed steps are taken as half steps
     and the run ends near a fine-step reference. (At 2 m/s plain Newton gets through since a correction that
     an old iteration matrix made worse is undone and redone with a fresh matrix; at 4 m/s since a step that
-    fails on kept matrices is retried with Newton's method; at 8 and 10 m/s since the steps after such a step
-    start with Newton's method.)"""
+    fails on kept matrices is retried with Newton's method.)"""
     mesh, dyn = cantilever()
     period = 2 * math.pi / beam_omega1()
-    v0 = mode1_velocity(mesh, dyn, 12.0)
+    v0 = mode1_velocity(mesh, dyn, 8.0)
     t_end = 0.5 * period
     plain = generalized_alpha(dyn, t_end, period / 40, velocity=v0, settings=AlphaSettings(rho_inf=0.9))
     assert not plain.converged and "failed" in plain.message
@@ -373,8 +372,8 @@ def test_cutbacks_rescue_a_large_amplitude_step():
     assert max(r.substeps for r in cut.records) > 1
     ref = generalized_alpha(dyn, t_end, period / 320, velocity=v0, settings=AlphaSettings(rho_inf=0.9))
     assert ref.converged, ref.message
-    # measured 2.32e-2 m with the steps cut (8 m/s: 9.5e-3 m): the cut steps cost the second order locally
-    assert np.abs(cut.state.x - ref.state.x).max() < 2.8e-2
+    # measured 9.5e-3 m with 2 steps cut (4 m/s: 2.85e-3 m): the cut steps cost the second order locally
+    assert np.abs(cut.state.x - ref.state.x).max() < 1.2e-2
 
 
 def test_a_worse_correction_from_an_old_matrix_is_undone():
