@@ -266,7 +266,9 @@ def summary_lines(summary) -> list[str]:
         f"steps            {d['steps']}  ({reached})",
         f"Newton           {d['newton_iterations']} iterations, {d['tangent_updates']} tangent updates, "
         f"{d['factorizations']} factorizations" + (f" ({d['newton_iteration']} iteration)"
-                                                   if "newton_iteration" in d else ""),
+                                                   if "newton_iteration" in d else "")
+        + (f"; per step {d['iterations_per_step']:.2f} iterations, {d['factorizations_per_step']:.3f} "
+           "factorizations" if dynamic else ""),
         f"wall time        set-up {d['setup_time_s']:.2f} s, compilation {d['compile_time_s']:.2f} s "
         f"(or loading from the cache), solve {d['solve_time_s']:.2f} s",
     ]

@@ -123,19 +123,20 @@ def director_step(frames: np.ndarray, target: np.ndarray) -> np.ndarray:
     theta = angle * R^T (t x t_target) / |t x t_target| is the in-plane rotation along the great circle
     (its axis is normal to the director, so it has no drilling component).
     """
-    from flexbody.lie import so3
-    out = frames.copy()
-    for i, (R, b) in enumerate(zip(frames, target)):
-        a = R[:, 2]
-        axis = np.cross(a, b)
-        sin, cos = np.linalg.norm(axis), float(a @ b)
-        if sin < 1e-15:
-            if cos < 0:
-                raise ValueError("a prescribed director reversed in one step")
-            continue
-        theta = R.T @ (axis / sin) * np.arctan2(sin, cos)
-        theta[2] = 0.0                       # exactly in-plane (R^T axis is normal to e3 up to round-off)
-        out[i] = R @ so3.exp(theta)
+    from flexbody.lie import kernels
+    frames = np.asarray(frames, dtype=float)
+    a = frames[:, :, 2]
+    b = np.asarray(target, dtype=float)
+    axis = np.cross(a, b)
+    sin, cos = np.linalg.norm(axis, axis=1), np.einsum("ni,ni->n", a, b)
+    still = sin < 1e-15
+    if np.any(still & (cos < 0)):
+        raise ValueError("a prescribed director reversed in one step")
+    angle = np.where(still, 0.0, np.arctan2(sin, cos) / np.where(still, 1.0, sin))
+    # the in-plane components R^T axis (e1, e2; the e3 component is zero up to round-off)
+    theta = np.einsum("nji,nj->ni", frames[:, :, :2], axis) * angle[:, None]
+    out = np.empty_like(frames)
+    kernels.update_frames_into(np.ascontiguousarray(frames), np.ascontiguousarray(theta), out)
     return out
 
 

@@ -380,6 +380,8 @@ class DynamicRunSummary:
             "scene": self.scene, "kind": "dynamic", "dofs": self.dofs, "elements": self.elements,
             "steps": self.steps, "newton_iterations": st.iterations, "tangent_updates": st.tangent_updates,
             "factorizations": st.factorizations, "wall_time_s": self.wall_time_s,
+            "iterations_per_step": st.iterations / max(self.steps, 1),
+            "factorizations_per_step": st.factorizations / max(self.steps, 1),
             "converged": self.result.converged, "message": self.result.message, "time": float(self.result.time),
             "end_time": a.end_time, "time_step": a.end_time / a.n_steps, "rho_inf": a.rho_inf, "policy": a.policy,
             "time_steps": self.step_summary(),

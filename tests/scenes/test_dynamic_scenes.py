@@ -36,6 +36,8 @@ def test_dynamic_run_json_has_the_summary_keys(tmp_path):
     assert d["kind"] == "dynamic" and d["steps"] == 10 and d["elements"] == 8 and d["converged"]
     assert d["time"] == pytest.approx(0.02) and d["time_step"] == pytest.approx(2e-3)
     assert d["newton_iterations"] >= 2 * d["steps"] and d["factorizations"] >= 1
+    assert d["factorizations_per_step"] == pytest.approx(d["factorizations"] / d["steps"])
+    assert d["iterations_per_step"] == pytest.approx(d["newton_iterations"] / d["steps"])
     assert set(d["outputs"]) == {"u_r_corner", "u_r_edge"} and d["outputs"]["u_r_corner"] > 0  # it stretches
     assert d["errors"] == [] and d["max_rel_error"] is None                                    # no reference
     e, m = d["energy"], d["momentum"]
