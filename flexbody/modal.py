@@ -174,25 +174,19 @@ def _symmetric_part(K: sp.csc_matrix) -> tuple[sp.csc_matrix, float]:
 
 
 def default_shift(problem: ModalProblem) -> float:
-    """A shift s > 0 of the order of the lowest eigenvalues omega^2: shift-invert about -s (or s for the
-    first-order form) factorizes K + s M, regular also for free bodies (rigid modes omega = 0) and spins.
+    """The shift s > 0 of the eigen-solvers: they factorize K + s M (at rest) or K + sqrt(s) G + s M (in spin).
 
-    s = max(Omega^2, s0) with s0 the Rayleigh quotient of the mass-weighted mean of the translations
-    (a smooth field whose quotient bounds the lowest elastic eigenvalue from above unless it is rigid),
-    floored at 1e-12 max(diag K / diag M)."""
+    At rest s = 1e-12 max_i(K_ii / M_ii): far below the lowest elastic eigenvalues omega^2 of a shell (the
+    largest diagonal ratio belongs to the stiff rotations of the smallest element), so that shift-invert about
+    -s converges on them as about 0 (measured: 64 solves for the first 20 modes of a 3e4-DoF plate, 220 with a
+    shift above omega_20^2), while K + s M stays regular for a free body (rigid modes omega ~ 0). In spin
+    s = Omega^2 (the gyroscopic and centrifugal terms set the scale; regular for a free spinning body), at
+    least that floor."""
     K, M = problem.K, problem.M
-    dk, dm = K.diagonal(), M.diagonal()
-    ratio = np.abs(dk) / np.where(dm > 0, dm, np.inf)
+    dm = M.diagonal()
+    ratio = np.abs(K.diagonal()) / np.where(dm > 0, dm, np.inf)
     floor = 1e-12 * float(ratio.max() or 1.0)
-    dyn = problem.dynamic
-    v = np.where(dyn.is_translation, 1.0, 0.0)
-    x = problem.state.x[dyn.node]
-    # a smooth non-rigid field: the translations weighted by the squared distance from the centroid
-    c = x.mean(axis=0)
-    v = v * np.sum((x - c) ** 2, axis=1)
-    num, den = float(v @ (K @ v)), float(v @ (M @ v))
-    s0 = abs(num / den) if den > 0 else 0.0
-    return max(problem.spin_rate ** 2, 1e-3 * s0, floor)
+    return max(problem.spin_rate ** 2, floor)
 
 
 @dataclass

@@ -144,8 +144,10 @@ def test_free_spinning_annulus_rigid_modes():
     dyn = annulus(2, 16, hub=None, thickness=1e-4)
     modes = solve_modes(modal_problem_in_spin(dyn, [0.0, 0.0, OMEGA], [0.0, 0.0, 0.0]), 8)
     w = modes.frequencies
-    assert np.allclose(w[:2], 0.0, atol=1e-5 * OMEGA)
-    assert np.allclose(w[2:6], OMEGA, rtol=1e-6)
+    # both are double roots with one eigenvector each (a rigid drift grows linearly in time): computed to
+    # about sqrt(machine epsilon), measured 3e-6 relative
+    assert np.allclose(w[:2], 0.0, atol=2e-5 * OMEGA)
+    assert np.allclose(w[2:6], OMEGA, rtol=2e-5)
     assert w[6] > 1.2 * OMEGA
     assert lamb_southwell(1, 0, NU) == pytest.approx(1.0)
 
