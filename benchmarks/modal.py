@@ -6,7 +6,7 @@
   NASA SP-160, eq. 4.21), meshes 4x4 .. 16x16;
 * annulus: the hub annulus a = 0.2, b = 1, E = 1e9, nu = 0.3, rho = 1000, Omega = 20 rad/s, pinned
   (translations held) and clamped to the hub, h = 1e-3 and 1e-4, against the 1-D radial membrane eigenproblem
-  (tests/membrane_reference.py); in-plane modes with their forward/backward (gyroscopic) split;
+  (tests/membrane_reference.py);
 * fft: examples/kicked_spinning_annulus.toml run for 20 revolutions from its steady spin: the spatial Fourier
   component n of the rim's transverse motion, then its temporal spectrum (Hann window, zero padding, parabolic
   peak interpolation), against the modal frequencies of the same mesh;
@@ -84,23 +84,6 @@ def annulus_study() -> None:
                       + " | ".join(f"{v:.3f}" for v in vals) + f" | {err:.2e} |")
     print("| membrane, 1-D radial (800 quadratic elements) | | | | " + " | ".join(f"{v:.3f}" for v in refs) + " | |")
 
-    print("\n### In-plane modes of the clamped hub annulus (h = 1e-3, 4x32): gyroscopic split\n")
-    dyn = annulus(4, 32, "all", 1e-3)
-    out = []
-    for omega in (0.0, OMEGA):
-        p = modal_problem_in_spin(dyn, [0, 0, omega], [0, 0, 0]) if omega else modal_problem_at_rest(dyn)
-        modes = solve_modes(p, 60)
-        reps = describe_modes(modes, axis=(0, 0, 1), center=(0, 0, 0))
-        inplane = []
-        for k, r in enumerate(reps):
-            u = modes.nodal_displacements(k) + 1j * modes.nodal_displacements(k, -np.pi / 2)
-            if np.abs(u[:, 2]).max() < 1e-3 * np.abs(u[:, :2]).max():
-                inplane.append((r.frequency_rad_s, r.nodal_diameters, r.nodal_circles))
-        out.append(inplane)
-    print("| Omega | in-plane frequencies (rad/s) with (nodal diameters) |")
-    print("|---|---|")
-    for omega, inplane in zip((0.0, OMEGA), out):
-        print(f"| {omega:g} | " + ", ".join(f"{w:.2f} ({n})" for w, n, _ in inplane[:8]) + " |")
 
 
 def fft_study(revolutions: int = 20) -> None:
