@@ -568,6 +568,9 @@ def modal_problem_of_scene(scene, omega: float | None = None, load_factor=None, 
         if omega is not None:
             raise CliError("--omega needs a dynamic scene (a static scene has no mass at rest to spin)")
         model = scene.model
+        if not model.body.material.density > 0:
+            raise CliError(f"a modal analysis needs the mass: the material density of {scene.name} is "
+                           f"{model.body.material.density!r}; set it (--set density=VALUE, material.density)")
         dyn = DynamicModel(model)
         if load_factor in (None, 0.0):
             return modal.modal_problem_at_rest(dyn)
@@ -764,12 +767,12 @@ def _parse_sweep(text: str) -> tuple[str, list]:
 
 def _modes_once(source, params: dict, args, omega, quiet: bool):
     scene = _build(source, params)
-    problem = modal_problem_of_scene(scene, omega, _parse_load_factor(args.load_factor), quiet)
     from flexbody import modal
     try:
+        problem = modal_problem_of_scene(scene, omega, _parse_load_factor(args.load_factor), quiet)
         modes = modal.solve_modes(problem, args.count, args.shift)
-    except ValueError as exc:
-        raise CliError(str(exc).splitlines()[0]) from None
+    except (ValueError, ArithmeticError, RuntimeError) as exc:
+        raise CliError(f"the modal analysis failed: {_run_failure(exc)}") from None
     reports = modal.describe_modes(modes)
     return scene, modes_record(scene.name, problem, modes, reports), modes
 

@@ -173,10 +173,15 @@ def test_lamb_southwell_reproduced_by_the_radial_eigenproblem():
 
 def test_modes_command_writes_the_json_and_refuses_bad_input(tmp_path, capsys):
     from flexbody.cli import main
-    out = tmp_path / "modes.json"
+    out, h5 = tmp_path / "modes.json", tmp_path / "modes.h5"
     assert main(["modes", "examples/kicked_spinning_annulus.toml", "--set", "n_radial=2", "--set", "n_circ=16",
-                 "--count", "5", "--json", str(out), "--quiet"]) == 0
+                 "--count", "5", "--json", str(out), "--h5", str(h5), "--quiet"]) == 0
     data = json.loads(out.read_text())
+    import h5py
+    with h5py.File(h5, "r") as f:
+        assert f.attrs["format"] == "flexbody-modes"
+        assert np.allclose(f["modes/frequency_rad_s"][()], data["frequencies_rad_s"])
+        assert f["modes/shape_real"].shape == (5, len(f["mesh/nodes"]), 3)
     assert data["frame"] == "co-rotating" and data["omega"] == pytest.approx(OMEGA)
     assert data["frequencies_rad_s"] == sorted(data["frequencies_rad_s"])
     assert [m["nodal_diameters"] for m in data["modes"]] == [0, 1, 1, 2, 2]
@@ -186,3 +191,5 @@ def test_modes_command_writes_the_json_and_refuses_bad_input(tmp_path, capsys):
         with pytest.raises(SystemExit) as exc:
             main(["modes", "examples/kicked_spinning_annulus.toml", "--quiet", *argv])
         assert match in str(exc.value) and "\n" not in str(exc.value)
+    with pytest.raises(SystemExit, match="density"):
+        main(["modes", "examples/clamped_plate.toml", "--quiet"])
