@@ -193,3 +193,19 @@ def test_modes_command_writes_the_json_and_refuses_bad_input(tmp_path, capsys):
         assert match in str(exc.value) and "\n" not in str(exc.value)
     with pytest.raises(SystemExit, match="density"):
         main(["modes", "examples/clamped_plate.toml", "--quiet"])
+
+
+def test_free_plate_has_six_rigid_modes_near_zero_and_its_elastic_modes():
+    """A free plate at rest: the shift keeps K + s M regular; six rigid modes at omega ~ 0, then the elastic
+    ones. Held by six corner supports (statically determinate: they stop the rigid motions only), its lowest
+    frequency interlaces (Rayleigh: six constraints): free omega_1 <= held omega_1 <= free omega_7."""
+    mesh = generators.strip(1.0, 1.0, 4, 4)
+    body = ShellBody(mesh, ShellMaterial(E, NU, 1e-3, density=RHO))
+    w = solve_modes(modal_problem_at_rest(DynamicModel(Model(body, []))), 8).frequencies
+    assert np.all(np.abs(w[:6]) < 1e-3 * w[6])
+    x = mesh.nodes
+    c = [int(np.argmin(np.linalg.norm(x - p, axis=1))) for p in ([0, 0, 0], [1, 0, 0], [0, 1, 0])]
+    held = Model(body, [Fix([c[0]], ("x", "y", "z")), Fix([c[1]], ("y", "z")), Fix([c[2]], "z")])
+    w_held = solve_modes(modal_problem_at_rest(DynamicModel(held)), 2).frequencies
+    assert w[0] <= w_held[0] <= w[6] * (1 + 1e-9)
+    assert w_held[0] > 0.3 * w[6]
