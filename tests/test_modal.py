@@ -208,4 +208,3 @@ def test_free_plate_has_six_rigid_modes_near_zero_and_its_elastic_modes():
     held = Model(body, [Fix([c[0]], ("x", "y", "z")), Fix([c[1]], ("y", "z")), Fix([c[2]], "z")])
     w_held = solve_modes(modal_problem_at_rest(DynamicModel(held)), 2).frequencies
     assert w[0] <= w_held[0] <= w[6] * (1 + 1e-9)
-    assert w_held[0] > 0.3 * w[6]
