@@ -7,6 +7,9 @@
     flexbody compare SCENE --with exudyn [--set KEY=VALUE ...] [--json FILE] [--quiet]
     flexbody sweep SCENE --grid KEY=V1,V2,... [--grid ...] [--zip] [--workers N | --scheduler ADDRESS]
         [--set KEY=VALUE ...] [--out DIR] [--json FILE] [--h5]         (docs/sweeps.md)
+    flexbody modes SCENE [--set K=V ...] [--count N] [--omega W | --load-factor L|end] [--sweep KEY=V1,...]
+                   [--json FILE] [--plot FILE.png] [--rerun FILE.rrd] [--h5 FILE.h5]
+    flexbody modes SCENE --buckling [--set K=V ...] [--count N] [--json FILE]
 
 SCENE is a built-in scene name (``flexbody list``) or a path to a ``.toml`` or ``.py`` scene file
 (docs/scenes.md). Bad input ends with one line on stderr naming the offending key or value (exit code 1);
@@ -763,6 +766,370 @@ def cmd_buckling(args) -> int:
         _write_json(json_path, result.as_dict(scene.name))
         print(f"written          {json_path}")
     return 0 if len(result.load_factors) else 2
+# modes
+# ----------------------------------------------------------------------------------------------------------
+
+#: frames per period of a mode shape in the rerun recording
+MODE_FRAMES = 24
+
+
+def _scene_spin(scene):
+    """(omega (3,), center (3,)) of a spinning dynamic scene, or (None, None).
+
+    A steady-spin start gives both; a driven hub (prescribed motion) turns at its rate at the end of the run,
+    measured by a one-sided difference of Q(t), about the axis through the centroid of its nodes."""
+    import numpy as np
+
+    from flexbody.spinning import SteadySpinStart
+    if scene.kind != "dynamic":
+        return None, None
+    a = scene.analysis
+    if isinstance(a.initial_state, SteadySpinStart):
+        s = a.initial_state
+        center = None if s.center is None else np.asarray(s.center, float)
+        return np.asarray(s.angular_velocity, float), center
+    for p in a.prescribed:
+        t = a.end_time
+        delta = 1e-6 * max(t, 1e-3)
+        Q0, Q1 = (np.asarray(p.motion(t - k * delta)[0], float) for k in (1, 0))
+        W = (Q1 - Q0) / delta @ Q1.T
+        rate = np.array([W[2, 1], W[0, 2], W[1, 0]])
+        if np.linalg.norm(rate) > 0:
+            return rate, scene.model.body.mesh.nodes[p.nodes].mean(axis=0)
+    return None, None
+
+
+def _parse_load_factor(text):
+    if text is None or text == "end":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        raise CliError(f"--load-factor must be a number or 'end', got {text!r}") from None
+    if not math.isfinite(value):
+        raise CliError(f"--load-factor must be finite, got {text!r}")
+    return value
+
+
+def modal_problem_of_scene(scene, omega: float | None = None, load_factor=None, quiet: bool = True):
+    """The :class:`flexbody.modal.ModalProblem` of a scene.
+
+    Static scenes: about the reference state (``load_factor`` None or 0), the equilibrium at a load factor
+    (a load-controlled path through the scene's load levels below it), or the end of the scene's path
+    ("end"). Dynamic scenes: about the steady spin of a spinning scene (its rate, or ``omega`` rad/s about its
+    axis; ``omega`` = 0: at rest), else about the reference state (without the loads and gravity; ``omega``
+    > 0 spins it about the z-axis through its mass centre)."""
+    import numpy as np
+
+    from flexbody import modal
+    from flexbody.dynamics import DynamicModel
+    if scene.kind == "static":
+        if omega is not None:
+            raise CliError("--omega needs a dynamic scene (a static scene has no mass at rest to spin)")
+        model = scene.model
+        if not model.body.material.density > 0:
+            raise CliError(f"a modal analysis needs the mass: the material density of {scene.name} is "
+                           f"{model.body.material.density!r}; set it (--set density=VALUE, material.density)")
+        dyn = DynamicModel(model)
+        if load_factor in (None, 0.0):
+            return modal.modal_problem_at_rest(dyn)
+        if load_factor == "end":
+            summary = _run_scene(scene, quiet=quiet)
+            result = summary.result
+        else:
+            from integrators.static import load_control
+            levels = [f for f in scene.analysis.load_factors if 0 < f < load_factor] + [load_factor]
+            result = load_control(model, levels, settings=scene.analysis.newton)
+        if not result.converged:
+            raise CliError(f"the static path did not reach the load factor: {result.message}")
+        return modal.modal_problem_at_rest(dyn, result.state, result.load_factor)
+    if load_factor not in (None, 0.0):
+        raise CliError("--load-factor needs a static scene")
+    a = scene.analysis
+    dyn = DynamicModel(scene.model, point_masses=list(a.point_masses))
+    spin, center = _scene_spin(scene)
+    if omega is not None:
+        axis = np.array([0.0, 0.0, 1.0]) if spin is None else spin / np.linalg.norm(spin)
+        spin = omega * axis
+    if spin is None or not np.any(spin):
+        return modal.modal_problem_at_rest(dyn)
+    try:
+        return modal.modal_problem_in_spin(dyn, spin, center)
+    except ValueError as exc:
+        raise CliError(str(exc).splitlines()[0]) from None
+
+
+def modes_record(scene_name: str, problem, modes, reports) -> dict:
+    """The JSON record of one modal analysis."""
+    return {"scene": scene_name, "frame": problem.frame, "omega": problem.spin_rate,
+            "omega_vector": [float(v) for v in problem.omega], "dofs": int(problem.K.shape[0]),
+            "frequencies_rad_s": [float(w) for w in modes.frequencies],
+            "frequencies_hz": [float(w) / (2 * math.pi) for w in modes.frequencies],
+            "stiffness_asymmetry": problem.asymmetry, "modes": [r.as_dict() for r in reports]}
+
+
+def modes_lines(record: dict) -> list[str]:
+    """The printed table of a modal analysis."""
+    head = f"{record['scene']}: {len(record['modes'])} modes, {record['dofs']} DoFs, {record['frame']} frame"
+    if record["omega"]:
+        head += f", spin {record['omega']:.6g} rad/s"
+    lines = [head, f"{'mode':>4s} {'omega rad/s':>14s} {'f Hz':>12s} {'diam':>5s} {'circ':>5s}"
+             + (f" {'fwd rad/s':>12s} {'bwd rad/s':>12s}" if record["omega"] else "")]
+    for k, m in enumerate(record["modes"], 1):
+        nd = "-" if m["nodal_diameters"] is None else str(m["nodal_diameters"])
+        nc = "-" if m["nodal_circles"] is None else str(m["nodal_circles"])
+        line = f"{k:4d} {m['frequency_rad_s']:14.6g} {m['frequency_hz']:12.6g} {nd:>5s} {nc:>5s}"
+        if record["omega"] and "inertial_forward_rad_s" in m:
+            line += f" {m['inertial_forward_rad_s']:12.6g} {m['inertial_backward_rad_s']:12.6g}"
+        lines.append(line)
+    return lines
+
+
+def _mode_animation_amplitude(problem) -> float:
+    import numpy as np
+    x = problem.dynamic.model.body.mesh.nodes
+    return 0.1 * float(np.ptp(x, axis=0).max() or 1.0)
+
+
+def write_modes_rerun(path: str, scene_name: str, modes) -> None:
+    """Animated mode shapes in a rerun recording: mode k over one period on the ``time`` timeline from k to
+    k + 1 (``MODE_FRAMES`` frames), amplitude a tenth of the body size; ``outputs/frequency_hz`` per mode."""
+    import numpy as np
+
+    from flexbody.outputs.rerun_log import RerunLogger
+    p = modes.problem
+    mesh = p.dynamic.model.body.mesh
+    amp = _mode_animation_amplitude(p)
+    step = 0
+    with RerunLogger(path, mesh, scene_name, kind="dynamic", color_range=(0.0, amp)) as log:
+        for k, w in enumerate(modes.frequencies):
+            for j in range(MODE_FRAMES):
+                phase = 2 * np.pi * j / MODE_FRAMES
+                shown = p.state.copy()
+                shown.x = p.state.x + amp * modes.nodal_displacements(k, phase)
+                log.log_step(step, k + j / MODE_FRAMES, shown, {"mode": k + 1, "frequency_hz": w / (2 * np.pi)})
+                step += 1
+
+
+def write_modes_hdf5(path: str, scene_name: str, record: dict, modes) -> None:
+    """The modes in an HDF5 file (docs/output_formats.md, format ``flexbody-modes``): the mesh as in
+    ``flexbody-hdf5``, the equilibrium state, and per mode its frequency and complex nodal translations."""
+    import h5py
+    import numpy as np
+
+    from flexbody.outputs.hdf5 import quaternions_from_matrices
+    p = modes.problem
+    mesh = p.dynamic.model.body.mesh
+    shapes = np.stack([modes.nodal_displacements(k) + 1j * modes.nodal_displacements(k, -np.pi / 2)
+                       for k in range(len(modes.frequencies))])
+    with h5py.File(path, "w") as f:
+        f.attrs["format"] = "flexbody-modes"
+        f.attrs["format_version"] = 1
+        f.attrs["scene"] = scene_name
+        f.attrs["frame"] = record["frame"]
+        f.attrs["omega"] = np.asarray(record["omega_vector"])
+        g = f.create_group("mesh")
+        g.create_dataset("nodes", data=mesh.nodes)
+        g.create_dataset("elements", data=mesh.elements.astype(np.int64))
+        g.create_dataset("directors", data=mesh.directors)
+        e = f.create_group("equilibrium")
+        e.create_dataset("x", data=p.state.x)
+        e.create_dataset("frames", data=quaternions_from_matrices(p.state.frames))
+        m = f.create_group("modes")
+        m.create_dataset("frequency_rad_s", data=np.asarray(record["frequencies_rad_s"]))
+        m.create_dataset("shape_real", data=shapes.real)
+        m.create_dataset("shape_imag", data=shapes.imag)
+        for key in ("nodal_diameters", "nodal_circles"):
+            m.create_dataset(key, data=np.array([-1 if r[key] is None else r[key] for r in record["modes"]]))
+
+
+def _pyplot():
+    from flexbody.outputs.report import _pyplot as pyplot
+    plt = pyplot()
+    if plt is None:
+        raise CliError("--plot needs matplotlib: pip install 'flexbody[dev]' (or matplotlib)")
+    return plt
+
+
+def plot_mode_shapes(path: str, record: dict, modes, at_most: int = 6) -> None:
+    """The first ``at_most`` mode shapes: the displacement normal to the body's mean plane (or its magnitude,
+    for a body that is not flat) on the mesh projected on that plane."""
+    import numpy as np
+    plt = _pyplot()
+    p = modes.problem
+    x = p.state.x
+    c = x.mean(axis=0)
+    _, _, vt = np.linalg.svd(x - c, full_matrices=False)
+    e1, e2, normal = vt
+    flat = np.ptp((x - c) @ normal) <= 1e-6 * np.ptp(x, axis=0).max()
+    tri = p.dynamic.model.body.mesh.elements[:, :3]
+    k = min(at_most, len(modes.frequencies))
+    cols = min(k, 3)
+    fig, axes = plt.subplots((k + cols - 1) // cols, cols, figsize=(4 * cols, 3.6 * ((k + cols - 1) // cols)),
+                             squeeze=False)
+    for i, ax in enumerate(axes.ravel()):
+        if i >= k:
+            ax.axis("off")
+            continue
+        u = modes.nodal_displacements(i)
+        value = u @ normal if flat else np.linalg.norm(u, axis=1)
+        top = float(np.abs(value).max()) or 1.0
+        ax.tripcolor((x - c) @ e1, (x - c) @ e2, tri, value, shading="gouraud", cmap="RdBu_r", vmin=-top, vmax=top)
+        ax.set_aspect("equal")
+        ax.set_title(f"mode {i + 1}: {record['frequencies_hz'][i]:.4g} Hz")
+        ax.set_xticks([]), ax.set_yticks([])
+    fig.suptitle(f"{record['scene']} ({record['frame']} frame)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def plot_campbell(path: str, sweep: dict) -> None:
+    """Frequencies (Hz) against the swept value; for a spin-rate sweep also the lines n Omega (n = 1..4)."""
+    import numpy as np
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    values = np.asarray(sweep["values"], float)
+    count = min(len(f) for f in sweep["frequencies_rad_s"])
+    F = np.array([f[:count] for f in sweep["frequencies_rad_s"]]) / (2 * np.pi)
+    for j in range(count):
+        ax.plot(values, F[:, j], "o-", ms=3, lw=1)
+    if sweep["parameter"] == "omega":
+        for n in range(1, 5):
+            ax.plot(values, n * values / (2 * np.pi), "k:", lw=0.8)
+            ax.annotate(f"{n}$\\Omega$", (values[-1], n * values[-1] / (2 * np.pi)), fontsize=8)
+        ax.set_xlabel("spin rate $\\Omega$ (rad/s)")
+    else:
+        ax.set_xlabel(sweep["parameter"])
+    ax.set_ylabel(f"frequency (Hz, {sweep['frame']} frame)")
+    ax.set_title(f"Campbell diagram: {sweep['scene']}")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _parse_sweep(text: str) -> tuple[str, list]:
+    if "=" not in text:
+        raise CliError(f"--sweep expects KEY=V1,V2,..., got {text!r}")
+    key, values = text.split("=", 1)
+    key = key.strip()
+    parsed = [_parse_value(v.strip()) for v in values.split(",") if v.strip()]
+    if not key or not parsed:
+        raise CliError(f"--sweep expects KEY=V1,V2,..., got {text!r}")
+    if key == "omega":
+        for v in parsed:
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v < 0:
+                raise CliError(f"--sweep omega values must be finite numbers >= 0 (rad/s), got {v!r}")
+    return key, parsed
+
+
+def _modes_once(source, params: dict, args, omega, quiet: bool):
+    scene = _build(source, params)
+    from flexbody import modal
+    try:
+        problem = modal_problem_of_scene(scene, omega, _parse_load_factor(args.load_factor), quiet)
+        modes = modal.solve_modes(problem, args.count, args.shift)
+    except (ValueError, ArithmeticError, RuntimeError) as exc:
+        raise CliError(f"the modal analysis failed: {_run_failure(exc)}") from None
+    reports = modal.describe_modes(modes)
+    return scene, modes_record(scene.name, problem, modes, reports), modes
+
+
+def cmd_modes(args) -> int:
+    """``flexbody modes``: natural frequencies and mode shapes about an equilibrium (one analysis), or a
+    Campbell diagram (``--sweep``), or with ``--buckling`` the linear buckling of a static scene's load pattern
+    (:func:`cmd_buckling`). Exit code 0, or 1 (bad input / an analysis that fails)."""
+    if getattr(args, "buckling", False):
+        others = [name for name, value in (("--omega", args.omega), ("--load-factor", args.load_factor),
+                                           ("--sweep", args.sweep), ("--shift", args.shift), ("--plot", args.plot),
+                                           ("--rerun", args.rerun), ("--h5", args.h5)) if value is not None]
+        if others:
+            raise CliError(f"--buckling takes --set, --count and --json only, not {others[0]}")
+        return cmd_buckling(args)
+    t0 = time.perf_counter()
+    params = _parse_sets(args.set or [])
+    if isinstance(args.count, bool) or args.count < 1:
+        raise CliError(f"--count must be an integer >= 1, got {args.count!r}")
+    if args.omega is not None and not (math.isfinite(args.omega) and args.omega >= 0):
+        raise CliError(f"--omega must be a finite number >= 0 (rad/s), got {args.omega!r}")
+    if args.shift is not None and not (math.isfinite(args.shift) and args.shift > 0):
+        raise CliError(f"--shift must be a finite number > 0 ((rad/s)^2), got {args.shift!r}")
+    outputs = {"--json": args.json, "--h5": args.h5, "--rerun": args.rerun, "--plot": args.plot}
+    source = _open(args.scene)
+    _check_outputs(outputs, _input_files(source))
+    if args.sweep and (args.rerun or args.h5):
+        raise CliError("--rerun and --h5 write the modes of one analysis, not of a --sweep")
+    if args.rerun:
+        import importlib.util
+        if importlib.util.find_spec("rerun") is None:
+            raise CliError("--rerun needs the rerun SDK: pip install 'flexbody[rerun]' (or rerun-sdk)")
+    if args.sweep:
+        key, values = _parse_sweep(args.sweep)
+        runs = []
+        for v in values:
+            point = dict(params) if key == "omega" else {**params, key: v}
+            omega = float(v) if key == "omega" else args.omega
+            _, record, _ = _modes_once(source, point, args, omega, args.quiet)
+            runs.append(record)
+            if not args.quiet:
+                print(f"  {key} = {v}: " + ", ".join(f"{w:.5g}" for w in record["frequencies_rad_s"]) + " rad/s",
+                      file=sys.stderr, flush=True)
+        sweep = {"scene": runs[0]["scene"], "parameter": key, "values": values, "frame": runs[-1]["frame"],
+                 "frequencies_rad_s": [r["frequencies_rad_s"] for r in runs], "runs": runs}
+        print(f"Campbell diagram of {sweep['scene']}: frequencies (rad/s) against {key}")
+        for v, r in zip(values, runs):
+            print(f"{key} = {v!s:>10s}  " + " ".join(f"{w:10.5g}" for w in r["frequencies_rad_s"]))
+        if args.json:
+            _write_json(args.json, sweep)
+            print(f"written          {args.json}")
+        if args.plot:
+            plot_campbell(args.plot, sweep)
+            print(f"written          {args.plot}")
+        print(f"total time       {time.perf_counter() - t0:.2f} s")
+        return 0
+    scene, record, modes = _modes_once(source, params, args, args.omega, args.quiet)
+    for line in modes_lines(record):
+        print(line)
+    if args.json:
+        _write_json(args.json, record)
+        print(f"written          {args.json}")
+    if args.rerun:
+        write_modes_rerun(args.rerun, scene.name, modes)
+        print(f"written          {args.rerun}")
+    if args.h5:
+        write_modes_hdf5(args.h5, scene.name, record, modes)
+        print(f"written          {args.h5}")
+    if args.plot:
+        plot_mode_shapes(args.plot, record, modes)
+        print(f"written          {args.plot}")
+    print(f"total time       {time.perf_counter() - t0:.2f} s")
+    return 0
+
+
+def add_modes_parser(sub) -> None:
+    """The ``modes`` subcommand's arguments (one function per analysis kind: see :func:`cmd_modes`)."""
+    modes = sub.add_parser("modes", help="natural frequencies and mode shapes about an equilibrium or a steady spin")
+    modes.add_argument("scene", help="built-in scene or .toml/.py scene file")
+    modes.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a scene parameter (repeatable)")
+    modes.add_argument("--count", type=int, default=10, metavar="N", help="number of modes (default 10)")
+    modes.add_argument("--omega", type=float, metavar="RAD_S",
+                       help="spin rate about the scene's spin axis (dynamic scenes; 0: at rest)")
+    modes.add_argument("--load-factor", metavar="L|end",
+                       help="static scenes: the equilibrium at load factor L, or at the end of the path "
+                            "(default: the unloaded reference state)")
+    modes.add_argument("--sweep", metavar="KEY=V1,V2,...",
+                       help="Campbell diagram: the frequencies against a --set parameter, or omega (the spin rate)")
+    modes.add_argument("--shift", type=float, metavar="S",
+                       help="the eigen-solver's shift in (rad/s)^2 (default: from the model)")
+    modes.add_argument("--json", metavar="FILE", help="write the frequencies and modes (or the sweep) as JSON")
+    modes.add_argument("--plot", metavar="FILE.png", help="plot the mode shapes (or the Campbell diagram)")
+    modes.add_argument("--rerun", metavar="FILE.rrd", help="animated mode shapes in a rerun recording")
+    modes.add_argument("--h5", metavar="FILE.h5", help="the mode shapes in an HDF5 file")
+    modes.add_argument("--buckling", action="store_true",
+                       help="linear buckling of a static scene's load pattern: the critical load factors and modes")
+    modes.add_argument("--quiet", action="store_true", help="no progress output")
+    modes.set_defaults(func=cmd_modes)
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -834,6 +1201,7 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("--json", metavar="FILE", help="write the comparison as JSON")
     compare.add_argument("--quiet", action="store_true", help="no progress output")
     compare.set_defaults(func=cmd_compare)
+    add_modes_parser(sub)
     return parser
 
 

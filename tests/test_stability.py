@@ -197,3 +197,14 @@ def test_stability_count_can_be_switched_off_in_python_and_toml(tmp_path):
     assert toml.analysis.stability is False
     with pytest.raises(Exception, match="stability"):
         load_toml_scene("examples/cantilever_end_shear.toml", {"analysis.stability": "maybe"})
+
+
+def test_flexbody_modes_buckling_runs_the_buckling_analysis(tmp_path, capsys):
+    from flexbody.cli import main
+    out = tmp_path / "b.json"
+    assert main(["modes", PLATE, "--buckling", "--count", "2", "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert len(data["load_factors"]) == 2 and data["load_factors"][0] > 0
+    assert "critical load factor" in capsys.readouterr().out
+    with pytest.raises(SystemExit, match="--buckling takes --set, --count and --json only, not --omega"):
+        main(["modes", PLATE, "--buckling", "--omega", "3"])
