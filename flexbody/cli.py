@@ -846,7 +846,7 @@ def modal_problem_of_scene(scene, omega: float | None = None, load_factor=None, 
     if load_factor not in (None, 0.0):
         raise CliError("--load-factor needs a static scene")
     a = scene.analysis
-    dyn = DynamicModel(scene.model, point_masses=list(a.point_masses))
+    dyn = DynamicModel(scene.model, point_masses=list(a.point_masses), mass=a.mass)
     spin, center = _scene_spin(scene)
     if omega is not None:
         axis = np.array([0.0, 0.0, 1.0]) if spin is None else spin / np.linalg.norm(spin)

@@ -245,6 +245,10 @@ class DynamicModel:
         self._M_fp = self._prescribed_coupling()
 
     # -- the mass matrix -----------------------------------------------------------------------------------
+    def translation_directions(self) -> sp.csr_matrix:
+        """T (3n x n_dof): the global nodal translations of the free DoFs, x_dot = T v (see ``_directions``)."""
+        return self._directions()
+
     def _directions(self) -> sp.csr_matrix:
         """T (3n x n_dof): column a is the direction d_a of translation DoF a in the rows of its node (the
         constraint basis column E_I[:, i], or e_i), zero for rotation DoFs. x_dot = T v (translations)."""

@@ -68,33 +68,28 @@ def _hat(v: np.ndarray) -> np.ndarray:
 
 
 def gyroscopic_matrix(dynamic: DynamicModel, state: ShellState, omega) -> sp.csc_matrix:
-    """G (skew, free x free) of the lumped mass in the frame turning at ``omega`` (module docstring).
+    """G (skew, free x free) of the dynamic model's mass in the frame turning at ``omega`` (module docstring).
 
-    Translations: 2 m_I hat(Omega) (on a node with a fixed translation basis E_I: 2 m_I E_I^T hat(Omega) E_I),
-    director rotations: 2 j_I (Omega . t_I) [[0, -1], [1, 0]]."""
+    Translations: T^T (S x 2 hat(Omega)) T with S the scalar mass matrix (lumped: diag(m_I); consistent:
+    int rho h N_I N_J dA) and T the translation directions of the free DoFs (on a node with a fixed
+    translation basis E_I: 2 m_I E_I^T hat(Omega) E_I when lumped); director rotations (their inertia is lumped
+    in both): 2 j_I (Omega . t_I) [[0, -1], [1, 0]]."""
     omega = np.asarray(omega, dtype=float)
     m = dynamic.model
     n = m.body.n_nodes
     index = -np.ones(6 * n, dtype=np.int64)
     index[m.free] = np.arange(m.n_dof)
     index = index.reshape(n, 6)
-    inertia = dynamic.inertia
-    W = np.tile(_hat(omega), (n, 1, 1))
-    b = np.flatnonzero(m.has_basis)
-    W[b] = np.einsum("nji,jk,nkl->nil", m.basis[b], _hat(omega), m.basis[b])
-    trans = 2.0 * inertia.mass[:, None, None] * W
+    T = dynamic.translation_directions()
+    trans = T.T @ sp.kron(dynamic.body_mass.scalar, 2.0 * _hat(omega)) @ T
     spin = state.directors @ omega
-    rot = 2.0 * (inertia.rotary * spin)[:, None, None] * np.array([[0.0, -1.0], [1.0, 0.0]])[None]
-    rows, cols, vals = [], [], []
-    for block, first in ((trans, 0), (rot, 3)):
-        k = block.shape[1]
-        idx = index[:, first:first + k]
-        r = np.repeat(idx[:, :, None], k, axis=2)
-        c = np.repeat(idx[:, None, :], k, axis=1)
-        keep = (r >= 0) & (c >= 0) & (block != 0.0)
-        rows.append(r[keep]), cols.append(c[keep]), vals.append(block[keep])
-    return sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                         shape=(m.n_dof, m.n_dof))
+    rot = 2.0 * (dynamic.body_mass.rotary * spin)[:, None, None] * np.array([[0.0, -1.0], [1.0, 0.0]])[None]
+    idx = index[:, 3:5]
+    r = np.repeat(idx[:, :, None], 2, axis=2)
+    c = np.repeat(idx[:, None, :], 2, axis=1)
+    keep = (r >= 0) & (c >= 0) & (rot != 0.0)
+    G = sp.csc_matrix((rot[keep], (r[keep], c[keep])), shape=(m.n_dof, m.n_dof)) + trans
+    return sp.csc_matrix(0.5 * (G - G.T))           # skew to the last bit
 
 
 def tangent_at_rest(dynamic: DynamicModel, state: ShellState, load_factor=0.0) -> sp.csc_matrix:

@@ -26,10 +26,11 @@ pytestmark = pytest.mark.usefixtures("one_numba_thread")
 A, B, E, NU, RHO, OMEGA = 0.2, 1.0, 1e9, 0.3, 1000.0, 20.0
 
 
-def annulus(n_radial, n_circ, hub="translations", thickness=1e-4, scale=1.0):
+def annulus(n_radial, n_circ, hub="translations", thickness=1e-4, scale=1.0, mass="lumped"):
     mesh = generators.annulus(A * scale, B * scale, n_radial, n_circ)
     cons = [Fix(mesh.node_set("inner"), hub)] if hub else []
-    return DynamicModel(Model(ShellBody(mesh, ShellMaterial(E, NU, thickness * scale, density=RHO)), cons))
+    return DynamicModel(Model(ShellBody(mesh, ShellMaterial(E, NU, thickness * scale, density=RHO)), cons),
+                        mass=mass)
 
 
 def test_gyroscopic_matrix_against_finite_differences_of_the_kinetic_energy():
@@ -76,6 +77,32 @@ def test_gyroscopic_matrix_against_finite_differences_of_the_kinetic_energy():
             assert not np.any(G[np.ix_(dofs, others)])
             checked += 1
     assert checked == 2 * dyn.model.body.n_nodes
+
+
+def test_gyroscopic_matrix_of_the_consistent_mass_against_finite_differences():
+    """Consistent mass: the translational momenta p = T^T (S x I)(Omega x x + xdot) couple the nodes; G on the
+    translations is dp/dq - (dp/dq)^T by central differences of x + T v (gauge supports, tilted axis)."""
+    rng = np.random.default_rng(7)
+    dyn0 = annulus(1, 6, hub=None, thickness=0.05, mass="consistent")
+    omega = np.array([3.0, -2.0, 20.0])
+    dyn = DynamicModel(Model(dyn0.model.body, gauge_supports(dyn0, omega, np.zeros(3))), mass="consistent")
+    state = random_state(dyn.model, rng, scale=0.05)
+    G = gyroscopic_matrix(dyn, state, omega).toarray()
+    T = dyn.translation_directions().toarray()
+    S3 = np.kron(dyn.body_mass.scalar.toarray(), np.eye(3))
+    tr = np.flatnonzero(np.abs(T).sum(axis=0) > 0)
+    x0 = state.x.ravel()
+
+    def p(v):
+        x = (x0 + T @ v).reshape(-1, 3)
+        return T.T @ S3 @ np.cross(omega, x).ravel()
+
+    D = np.column_stack([(p(1e-3 * e) - p(-1e-3 * e)) / 2e-3 for e in np.eye(dyn.n_dof)[tr]])[tr]
+    Gfd = D - D.T
+    assert np.abs(G[np.ix_(tr, tr)] - Gfd).max() <= 1e-9 * np.abs(Gfd).max()
+    lumped = DynamicModel(Model(dyn0.model.body, gauge_supports(dyn0, omega, np.zeros(3))))
+    assert np.abs(gyroscopic_matrix(lumped, state, omega).toarray()[np.ix_(tr, tr)] - Gfd).max() \
+        > 1e-2 * np.abs(Gfd).max()       # the lumped masses in it would be wrong
 
 
 def test_quadratic_solver_against_a_dense_solution():
