@@ -235,3 +235,23 @@ def test_free_plate_has_six_rigid_modes_near_zero_and_its_elastic_modes():
     held = Model(body, [Fix([c[0]], ("x", "y", "z")), Fix([c[1]], ("y", "z")), Fix([c[2]], "z")])
     w_held = solve_modes(modal_problem_at_rest(DynamicModel(held)), 2).frequencies
     assert w[0] <= w_held[0] <= w[6] * (1 + 1e-9)
+
+
+def test_plate_spinning_about_its_long_axis_wobbles_at_eulers_frequency():
+    """A gyroscopic case with a spin axis in the plate's plane: a stiff free 2 x 1 plate spinning about its long
+    axis (the least moment of inertia: stable). Its rigid wobble, seen in the turning frame, has Euler's
+    frequency omega^2 = Omega^2 (I3 - I1)(I2 - I1) / (I3 I2) (the linearized Euler equations, e.g. Goldstein,
+    Classical Mechanics, 5.6), with I1 = m W^2/12 + J, I2 = m L^2/12 + J, I3 = m (L^2 + W^2)/12 and the
+    director inertia J = rho h^3/12 L W; the elastic modes lie far above (measured: 7.6e-8 relative)."""
+    L, W, h, rho, Om = 2.0, 1.0, 0.02, 1000.0, 2.0
+    mesh = generators.strip(L, W, 4, 2)
+    dyn = DynamicModel(Model(ShellBody(mesh, ShellMaterial(1e11, NU, h, density=rho)), []), mass="consistent")
+    m, J = rho * h * L * W, rho * h**3 / 12 * L * W
+    I1, I2, I3 = m * W**2 / 12 + J, m * L**2 / 12 + J, m * (L**2 + W**2) / 12
+    euler = Om * np.sqrt((I3 - I1) * (I2 - I1) / (I3 * I2))
+    problem = modal_problem_in_spin(dyn, [Om, 0.0, 0.0], [L / 2, W / 2, 0.0])
+    w = solve_modes(problem, 7).frequencies
+    assert np.allclose(w[:2], 0.0, atol=1e-3 * Om)                 # along and about the axis
+    assert w[2] == pytest.approx(euler, rel=1e-6)
+    assert np.allclose(w[3:6], Om, rtol=1e-3)                      # the two transverse translations, the tilt
+    assert w[6] > 50 * Om
