@@ -22,19 +22,11 @@ import scipy.sparse as sp
 from flexbody.body import ShellBody, ShellState, update_state
 from flexbody.constraints import Fix, FixDirection, Symmetry, basis_with_first
 from flexbody.frames import align_frame
+from flexbody.lie.so3 import hat_many
 from flexbody.loads import FollowerPressure, NodalLoad, pressure_contribution
 from flexbody.scatter import scatter_blocks
 
 _COMPONENT = {"x": 0, "y": 1, "z": 2}
-
-
-def hat_many(v: np.ndarray) -> np.ndarray:
-    """hat() of each row of v (k, 3) -> (k, 3, 3)."""
-    out = np.zeros(v.shape[:-1] + (3, 3))
-    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
-    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
-    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
-    return out
 
 
 class ModelError(ValueError):

@@ -176,6 +176,15 @@ def hat(v: np.ndarray) -> np.ndarray:
                      [-v[1], v[0], 0.0]])
 
 
+def hat_many(v: np.ndarray) -> np.ndarray:
+    """:func:`hat` of each vector of v (..., 3) -> (..., 3, 3)."""
+    out = np.zeros(v.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
 def vee(W: np.ndarray) -> np.ndarray:
     """Axial vector of a skew matrix (inverse of :func:`hat`; the skew part is used)."""
     return 0.5 * np.array([W[2, 1] - W[1, 2], W[0, 2] - W[2, 0], W[1, 0] - W[0, 1]])
