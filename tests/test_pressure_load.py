@@ -39,3 +39,21 @@ def test_pressure_tangent_against_central_differences():
                 Fm = pressure_contribution(mesh, xm, 1.7, [e])[0][conn]
                 fd = (Fp - Fm) / (2 * h)                       # (6, 3): dF_I,a / dx_J,b
                 assert np.abs(fd - dF[k, :, j, :, b]).max() <= 1e-7 * np.abs(dF[k]).max()
+
+
+def test_reference_geometry_of_all_elements_equals_the_element_by_element_one():
+    from flexbody.frames import frames_from_directors
+    from flexbody.lie import so3
+    from flexbody.shell.geometry import element_geometry, element_geometry_batch
+    mesh = generators.spherical_cap(1.0, 18.0, 3, 5)
+    rng = np.random.default_rng(2)
+    frames = frames_from_directors(mesh.directors)
+    frames = np.array([R @ so3.exp(0.3 * rng.standard_normal(3)) for R in frames])   # rotated node frames
+    frames[mesh.elements[0, 1]] = frames[mesh.elements[0, 0]] @ so3.exp([0.0, 0.0, 3.0])  # near pi
+    X, Fr = mesh.nodes[mesh.elements], frames[mesh.elements]
+    e_ref, to_cart, weights = element_geometry_batch(X, Fr)
+    for k in range(len(X)):
+        g = element_geometry(X[k], Fr[k])
+        assert np.abs(g.e_ref - e_ref[k]).max() <= 1e-12 * np.abs(g.e_ref).max()
+        assert np.abs(g.to_cart - to_cart[k]).max() <= 1e-12 * np.abs(g.to_cart).max()
+        assert np.abs(g.weights - weights[k]).max() <= 1e-14 * g.weights.max()
