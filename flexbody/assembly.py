@@ -29,6 +29,13 @@ from flexbody.scatter import scatter_blocks
 _COMPONENT = {"x": 0, "y": 1, "z": 2}
 
 
+def _sorted_unique(keys: np.ndarray) -> np.ndarray:
+    """np.unique of integer keys by a sort (numpy's hash-based unique is several times slower on the millions
+    of (row, column) keys of a model's pattern)."""
+    keys = np.sort(keys)
+    return keys[np.concatenate([[True], keys[1:] != keys[:-1]])] if keys.size else keys
+
+
 class ModelError(ValueError):
     """A model that cannot be solved as given (bad constraint, every DoF fixed, loads on constrained DoFs only, ...)."""
 
@@ -100,7 +107,7 @@ class Model:
         nr, nc = np.repeat(fn, 6, axis=1).ravel(), np.tile(fn, (1, 6)).ravel()
         rows, cols = np.concatenate([er, nr]), np.concatenate([ec, nc])
         valid = (rows >= 0) & (cols >= 0)
-        keys = np.unique(rows[valid] * n_free + cols[valid])
+        keys = _sorted_unique(rows[valid] * n_free + cols[valid])
         self._indices = (keys % n_free).astype(np.int32)
         self._indptr = np.searchsorted(keys // n_free, np.arange(n_free + 1)).astype(np.int32)
         slot = lambda r, c: np.where((r >= 0) & (c >= 0), np.searchsorted(keys, r * n_free + c), -1)

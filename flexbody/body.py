@@ -16,7 +16,6 @@ from flexbody.mesh import Tri6Mesh
 from flexbody.shell.element_reference import assumed_strain_maps
 from flexbody.shell.geometry import N_GAUSS, element_geometry_batch
 from flexbody.shell.material import ShellMaterial
-from flexbody.shell.mitc6 import N_TYING
 
 
 @dataclass
