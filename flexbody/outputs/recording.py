@@ -145,6 +145,7 @@ class RunRecorder:
         self.stresses = bool(stresses)
         self._xdmf = None
         self._gravity = None
+        self._energy0 = None           # T + W + V_g + D of the first logged dynamic step (the drift's origin)
         self._warn = warn or (lambda message: warnings.warn(message, RuntimeWarning, stacklevel=3))
         self.kind = getattr(scene, "kind", "static")
         self.names = [o.name for o in scene.outputs]
@@ -177,7 +178,7 @@ class RunRecorder:
                 if scene.reference is not None:
                     reference = {k: (scene.reference.load_factors, v) for k, v in scene.reference.values.items()}
                 self._rrd = RerunLogger(rerun, mesh, scene.name, directors=directors, reference=reference,
-                                        kind=self.kind)
+                                        kind=self.kind, outputs=self.names)
         except BaseException:
             self.close()
             raise
@@ -216,11 +217,22 @@ class RunRecorder:
                 self._drop_xdmf(exc)
         if self._rrd is not None:
             try:
-                self._rrd.log_step(rec.step, where, state, tracked)
+                self._rrd.log_step(rec.step, where, state, tracked, self._energy_stats(rec))
                 self._rrd.flush()
             except Exception as exc:  # a recording is for looking: it never stops the solve
                 self._drop_recording(exc)
         self.steps_written += 1
+
+    def _energy_stats(self, rec) -> dict[str, float] | None:
+        """The energies of a dynamic step and the drift of T + W + V_g + D from its first value (rerun plots)."""
+        if self.kind != "dynamic":
+            return None
+        stats = {k: v for k, v in dynamic_stats(rec).items() if k.endswith("_energy")}
+        balance = float(rec.total_energy + rec.dissipated_energy)
+        if self._energy0 is None:
+            self._energy0 = balance
+        stats["energy_drift"] = balance - self._energy0
+        return stats
 
     def _residual(self, state, lam: float) -> float:
         """The work norm of the static residual r(q, lam) on the free DoFs of the state written."""
