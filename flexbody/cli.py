@@ -491,7 +491,8 @@ def cmd_run(args) -> int:
     try:
         recorder = RunRecorder(scene, h5=args.h5, rerun=args.rerun, directors=args.directors,
                                warn=lambda message: print(f"flexbody: warning: {message}", file=sys.stderr),
-                               xdmf=xdmf, stresses=getattr(args, "stresses", False))
+                               xdmf=xdmf, stresses=getattr(args, "stresses", False),
+                               rerun_color=getattr(args, "rerun_color", "deformation"))
     except (OSError, ImportError, ValueError) as exc:
         raise CliError(str(exc).splitlines()[0]) from None
     failure = None
@@ -706,6 +707,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--h5", metavar="FILE.h5", help="write the mesh and every step to an HDF5 file")
     run.add_argument("--rerun", metavar="FILE.rrd", help="write a rerun recording (needs rerun-sdk)")
     run.add_argument("--directors", action="store_true", help="with --rerun: also log the directors")
+    run.add_argument("--rerun-color", choices=["deformation", "displacement", "stress"], default="deformation",
+                     help="with --rerun: colour by the displacement without the rigid motion (default), by |x - X0| "
+                     "or by the von Mises fibre stress")
     run.add_argument("--xdmf", metavar="FILE.xdmf", help="write an XDMF time series for ParaView (arrays in "
                      "FILE.xdmf.h5; needs meshio)")
     run.add_argument("--stresses", action="store_true", help="with --h5: also write the stress resultants and "

@@ -55,9 +55,10 @@ from flexbody.outputs.files import check_free_space, lock_output, release
 
 # viridis at 0, 1/4, 1/2, 3/4, 1 (sRGB)
 _VIRIDIS = np.array([[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]], dtype=float)
-COLOR_BY = ("deformation", "displacement", None)
+COLOR_BY = ("deformation", "displacement", "stress", None)
 COLOR_TEXT = {"deformation": "displacement without the rigid motion (Kabsch fit)",
-              "displacement": "displacement |x - X0|"}
+              "displacement": "displacement |x - X0|",
+              "stress": "von Mises fibre stress, the larger of top and bottom (nodal average)"}
 #: the energy plots of a dynamic run: ``stats/<name>`` entities
 ENERGY_STATS = ("kinetic_energy", "strain_energy", "gravity_energy", "total_energy")
 DRIFT_STATS = ("energy_drift",)
@@ -160,7 +161,8 @@ class RerunLogger:
     mesh : anything with ``.nodes`` (n, 3), ``.elements`` (m, 6) and ``.directors`` (n, 3)
     scene_name : the recording's name
     color_by : "deformation" (the displacement without the rigid motion, :func:`deformation`),
-        "displacement" (|x - X0|), both through a viridis colour map, or None (uniform colour)
+        "displacement" (|x - X0|), "stress" (a nodal field given to :meth:`log_step`, e.g. the von Mises fibre
+        stress of :func:`flexbody.results.stress_resultants`), through a viridis colour map, or None (uniform)
     directors : also log the directors as arrows
     reference : reference curves {name: (load_factors, values)} (or times, for kind "dynamic")
     kind : "static" (``load_factor`` timeline) or "dynamic" (``time`` timeline)
@@ -269,9 +271,10 @@ class RerunLogger:
         self.close()
 
     def log_step(self, step: int, load_factor_or_time: float, state, tracked: dict[str, float] | None = None,
-                 stats: dict[str, float] | None = None) -> None:
+                 stats: dict[str, float] | None = None, field: np.ndarray | None = None) -> None:
         """Log one step: ``state`` has ``.x`` (n, 3) and ``.frames`` (n, 3, 3); ``tracked`` {name: value};
-        ``stats`` {name: value} (e.g. the energies of a dynamic step) go to ``stats/<name>``."""
+        ``stats`` {name: value} (e.g. the energies of a dynamic step) go to ``stats/<name>``; ``field`` (n,)
+        the nodal values the colours show when ``color_by="stress"``."""
         if self._closed:
             raise ValueError(f"rerun recording {self.path!r} is closed")
         rr, rec = self._rr, self._rec
@@ -289,7 +292,12 @@ class RerunLogger:
         if self.color_by is None:
             colors = np.broadcast_to(np.array(UNIFORM_COLOR, np.uint8), x.shape)
         else:
-            values = w if self.color_by == "deformation" else u
+            values = {"deformation": w, "displacement": u}.get(self.color_by)
+            if values is None:
+                values = np.asarray(field, dtype=float) if field is not None else None
+                if values is None or values.shape != (len(x),):
+                    raise ValueError(f"color_by='stress' needs a nodal field of shape ({len(x)},) per step, got "
+                                     f"{None if field is None else np.shape(field)}")
             if np.isfinite(values).all():
                 self._scale_max = max(self._scale_max, float(values.max()) if values.size else 0.0)
             vmin, vmax = self.color_range if self.color_range is not None else (0.0, self._scale_max)

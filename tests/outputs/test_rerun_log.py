@@ -150,7 +150,7 @@ def test_bad_arguments(tmp_path):
     with pytest.raises(OSError, match="no/such/dir"):
         RerunLogger(tmp_path / "no" / "such" / "dir" / "r.rrd", mesh, "square")
     with pytest.raises(ValueError, match="color_by"):
-        RerunLogger(tmp_path / "r.rrd", mesh, "square", color_by="stress")
+        RerunLogger(tmp_path / "r.rrd", mesh, "square", color_by="strain")
     with pytest.raises(ValueError, match="reference"):
         RerunLogger(tmp_path / "r.rrd", mesh, "square", reference={"W": ([0.1, 0.2], [1.0])})
 
@@ -192,3 +192,20 @@ def test_blueprint_legend_energies_and_a_fixed_colour_scale(tmp_path):
     assert len(column(chunks["/stats/max_deformation"], "Scalars:scalars", static=False)) == 3
     from rerun.chunk import RrdReader                         # the blueprint went into the file
     assert [b.kind for b in RrdReader(str(path)).blueprints()] == ["blueprint"]
+
+
+def test_a_run_coloured_by_the_von_mises_stress(tmp_path, capsys):
+    pytest.importorskip("rerun")
+    from flexbody.cli import main
+    from flexbody.outputs.rerun_log import RerunLogger
+    path = tmp_path / "s.rrd"
+    assert main(["run", "cantilever_end_shear", "--set", "nx=4", "--set", "ny=1", "--set", "steps=2",
+                 "--rerun", str(path), "--rerun-color", "stress", "--quiet"]) == 0
+    legend = column(read_chunks(path)["/body/legend"], "TextDocument:text", static=False)
+    assert len(legend) == 2 and "von Mises" in legend[-1][0]
+    top = float(legend[-1][0].split(" .. ")[1].split()[0])
+    assert top > 0
+    mesh = square_mesh()
+    with RerunLogger(tmp_path / "f.rrd", mesh, "square", color_by="stress") as log:
+        with pytest.raises(ValueError, match="needs a nodal field of shape"):
+            log.log_step(1, 0.5, states(mesh, 1)[0], {})
