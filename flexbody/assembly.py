@@ -290,7 +290,7 @@ class Model:
             blocks[:, :3, 3:] += hat_many(Fl)
             conn = self.body.mesh.elements[elems]
             Rc = R[conn]                                        # (k, 6, 3, 3)
-            local = np.einsum("kiba,kijbc,kjcd->kijad", Rc, dF, Rc)  # R_I^T dF_IJ R_J
+            local = np.swapaxes(Rc, -1, -2)[:, :, None] @ dF @ Rc[:, None]  # R_I^T dF_IJ R_J (matmul: fast)
             press.append((elems, conn, local))
         return f, blocks, press
 
