@@ -22,19 +22,18 @@ import scipy.sparse as sp
 from flexbody.body import ShellBody, ShellState, update_state
 from flexbody.constraints import Fix, FixDirection, Symmetry, basis_with_first
 from flexbody.frames import align_frame
+from flexbody.lie.so3 import hat_many
 from flexbody.loads import FollowerPressure, NodalLoad, pressure_contribution
 from flexbody.scatter import scatter_blocks
 
 _COMPONENT = {"x": 0, "y": 1, "z": 2}
 
 
-def hat_many(v: np.ndarray) -> np.ndarray:
-    """hat() of each row of v (k, 3) -> (k, 3, 3)."""
-    out = np.zeros(v.shape[:-1] + (3, 3))
-    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
-    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
-    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
-    return out
+def _sorted_unique(keys: np.ndarray) -> np.ndarray:
+    """np.unique of integer keys by a sort (numpy's hash-based unique is several times slower on the millions
+    of (row, column) keys of a model's pattern)."""
+    keys = np.sort(keys)
+    return keys[np.concatenate([[True], keys[1:] != keys[:-1]])] if keys.size else keys
 
 
 class ModelError(ValueError):
@@ -108,7 +107,7 @@ class Model:
         nr, nc = np.repeat(fn, 6, axis=1).ravel(), np.tile(fn, (1, 6)).ravel()
         rows, cols = np.concatenate([er, nr]), np.concatenate([ec, nc])
         valid = (rows >= 0) & (cols >= 0)
-        keys = np.unique(rows[valid] * n_free + cols[valid])
+        keys = _sorted_unique(rows[valid] * n_free + cols[valid])
         self._indices = (keys % n_free).astype(np.int32)
         self._indptr = np.searchsorted(keys // n_free, np.arange(n_free + 1)).astype(np.int32)
         slot = lambda r, c: np.where((r >= 0) & (c >= 0), np.searchsorted(keys, r * n_free + c), -1)
@@ -291,7 +290,7 @@ class Model:
             blocks[:, :3, 3:] += hat_many(Fl)
             conn = self.body.mesh.elements[elems]
             Rc = R[conn]                                        # (k, 6, 3, 3)
-            local = np.einsum("kiba,kijbc,kjcd->kijad", Rc, dF, Rc)  # R_I^T dF_IJ R_J
+            local = np.swapaxes(Rc, -1, -2)[:, :, None] @ dF @ Rc[:, None]  # R_I^T dF_IJ R_J (matmul: fast)
             press.append((elems, conn, local))
         return f, blocks, press
 

@@ -14,9 +14,8 @@ from flexbody.frames import frames_from_directors
 from flexbody.lie import kernels
 from flexbody.mesh import Tri6Mesh
 from flexbody.shell.element_reference import assumed_strain_maps
-from flexbody.shell.geometry import N_GAUSS, element_geometry
+from flexbody.shell.geometry import N_GAUSS, element_geometry_batch
 from flexbody.shell.material import ShellMaterial
-from flexbody.shell.mitc6 import N_TYING
 
 
 @dataclass
@@ -85,16 +84,12 @@ def model_origin(nodes: np.ndarray) -> np.ndarray:
 
 
 def build_reference(mesh: Tri6Mesh, frames0: np.ndarray, origin: np.ndarray | None = None) -> ReferenceGeometry:
-    """The elements' reference data, from the node positions relative to ``origin`` (default 0)."""
-    m = mesh.n_elements
-    e_ref = np.zeros((m, N_TYING + N_GAUSS, 8))
-    to_cart = np.zeros((m, N_GAUSS, 8, 8))
-    weights = np.zeros((m, N_GAUSS))
+    """The elements' reference data, from the node positions relative to ``origin`` (default 0), all
+    elements at once (:func:`flexbody.shell.geometry.element_geometry_batch`; element by element it is
+    :func:`flexbody.shell.geometry.element_geometry`)."""
     nodes = mesh.nodes if origin is None else mesh.nodes - origin
-    for e, conn in enumerate(mesh.elements):
-        g = element_geometry(nodes[conn], frames0[conn])
-        e_ref[e], to_cart[e], weights[e] = g.e_ref, g.to_cart, g.weights
-    return ReferenceGeometry(e_ref, to_cart, weights)
+    conn = mesh.elements
+    return ReferenceGeometry(*element_geometry_batch(nodes[conn], frames0[conn]))
 
 
 @dataclass

@@ -170,6 +170,13 @@ def _write_json(path: str, data) -> None:
         raise CliError(f"cannot write --json file {path!r}: {exc.strerror or exc}") from None
 
 
+def _write_json_stdout(data) -> None:
+    """``--json -``: the JSON document alone on standard output."""
+    json.dump(_strict_json(data), sys.stdout, indent=2)
+    sys.stdout.write("\n")
+    sys.stdout.flush()
+
+
 def _strict_json(value):
     """NaN/inf as null so that every JSON reader accepts the file."""
     if isinstance(value, dict):
@@ -185,8 +192,9 @@ class _Progress:
     """Progress on stderr: the kernels' compilation notices (:meth:`notify`) and a line per step (call); the
     steps' clock starts when the kernels are ready."""
 
-    def __init__(self, prefix: str = "") -> None:
+    def __init__(self, prefix: str = "", total: int | None = None) -> None:
         self.prefix = prefix
+        self.total = total          # the number of steps, if known: the lines then show k/N and the time left
         self.t0 = time.perf_counter()
 
     def notify(self, notice) -> None:
@@ -200,20 +208,34 @@ class _Progress:
             where = f"time {rec.time:10.5g} s  iterations {rec.iterations:2d}  energy {rec.total_energy:11.5g}"
         else:
             where = f"load factor {rec.load_factor:8.4f}  iterations {rec.iterations:2d}"
-        print(f"{self.prefix}  step {rec.step:4d}  {where}  {time.perf_counter() - self.t0:7.2f} s",
-              file=sys.stderr, flush=True)
+        elapsed = time.perf_counter() - self.t0
+        if self.total:
+            left = elapsed / max(rec.step, 1) * max(self.total - rec.step, 0)
+            print(f"{self.prefix}  step {rec.step:4d}/{self.total}  {where}  left ~{left:7.1f} s  "
+                  f"elapsed {elapsed:7.2f} s", file=sys.stderr, flush=True)
+        else:
+            print(f"{self.prefix}  step {rec.step:4d}  {where}  {elapsed:7.2f} s", file=sys.stderr, flush=True)
 
 
-def _progress_printer(quiet: bool, prefix: str = "") -> _Progress | None:
+def _step_count(scene) -> int | None:
+    """The number of steps of a run, where it is known in advance (load control; a dynamic run)."""
+    a = scene.analysis
+    if scene.kind == "static":
+        return len(a.load_factors) if a.method == "load_control" else None
+    steps = getattr(a, "end_time", 0.0) / getattr(a, "time_step", 0.0) if getattr(a, "time_step", 0.0) else 0
+    return int(math.floor(steps + 1e-9)) or None
+
+
+def _progress_printer(quiet: bool, prefix: str = "", total: int | None = None) -> _Progress | None:
     """The progress printer on stderr (None with --quiet)."""
-    return None if quiet else _Progress(prefix)
+    return None if quiet else _Progress(prefix, total)
 
 
 def _run_scene(scene, on_step=None, quiet: bool = False, prefix: str = "", started: float | None = None,
                restart=None):
     """``run_scene`` with the progress and compilation notices on stderr (none with ``quiet``)."""
     from flexbody.scenes.scene import run_scene
-    progress = _progress_printer(quiet, prefix)
+    progress = _progress_printer(quiet, prefix, _step_count(scene))
     notify = None if progress is None else progress.notify
     extra = {} if restart is None else {"restart": restart}
     return run_scene(scene, on_step=on_step, progress=progress, notify=notify, started=started, **extra)
@@ -229,6 +251,76 @@ def cmd_list(args) -> int:
     for name, builder in BUILTIN.items():
         doc = (builder.__doc__ or "").strip().splitlines()[0]
         print(f"{name:24s} {doc}")
+    return 0
+
+
+# ----------------------------------------------------------------------------------------------------------
+# show
+# ----------------------------------------------------------------------------------------------------------
+
+#: Units of the scenes' parameters by their (last) key. The scenes use consistent units (the spinning and
+#: dynamic scenes SI: m, kg, s); mesh and step counts and switches have none.
+PARAMETER_UNITS = {"thickness": "length", "radius": "length", "inner_radius": "length",
+                   "outer_radius": "length", "length": "length", "width": "length", "young": "force/length^2",
+                   "pressure": "force/length^2", "density": "mass/length^3", "dt": "s", "end_time": "s",
+                   "ramp_time": "s", "omega": "rad/s", "angular_velocity": "rad/s", "steps": "load steps"}
+
+
+def _parameter_unit(key: str) -> str:
+    name = key.split(".")[-1]
+    if name in PARAMETER_UNITS:
+        return PARAMETER_UNITS[name]
+    return "elements" if name == "n" or name.startswith("n_") else ""
+
+
+def show_lines(source, scene) -> list[str]:
+    """The text of ``flexbody show``: the scene, its parameters with defaults and units, its reference."""
+    import inspect
+    from flexbody.scenes.builtin import BUILTIN
+    model = scene.model
+    lines = [f"scene            {scene.name} ({source.kind})", f"models           {scene.description}"]
+    if source.kind == "builtin":
+        doc = (BUILTIN[source.name].__doc__ or "").strip().splitlines()[0]
+        if doc and doc != scene.description:
+            lines.append(f"                 {doc}")
+    lines.append(f"mesh             {model.body.mesh.n_nodes} nodes, {model.body.mesh.n_elements} elements "
+                 f"({model.body.element_name}), {model.n_dof} DoFs")
+    a = scene.analysis
+    if scene.kind == "static":
+        lines.append(f"analysis         static, {a.method}, {len(a.load_factors)} load steps to load factor "
+                     f"{a.load_factors[-1]:g}" if getattr(a, "load_factors", None) else
+                     f"analysis         static, {a.method}")
+    else:
+        lines.append(f"analysis         dynamic, time step {a.time_step:g} s to {a.end_time:g} s"
+                     if hasattr(a, "end_time") else "analysis         dynamic")
+    defaults = {}
+    if source.kind in ("builtin", "python"):
+        func = BUILTIN[source.name] if source.kind == "builtin" else None
+        if func is not None:
+            defaults = {k: p.default for k, p in inspect.signature(func).parameters.items()
+                        if p.default is not inspect.Parameter.empty}
+    params = {**defaults, **{k: v for k, v in scene.parameters.items() if k not in defaults}}
+    if params:
+        lines.append("parameters       (set with --set KEY=VALUE; default, unit)")
+        for k, v in params.items():
+            unit = _parameter_unit(k)
+            lines.append(f"  {k:20s} {v!r:>14s}  {unit}".rstrip())
+    outs = ", ".join(o.name for o in scene.outputs)
+    if outs:
+        lines.append(f"outputs          {outs}")
+    if scene.reference is not None:
+        lines.append(f"reference        {scene.reference.source or 'given'}")
+    else:
+        lines.append("reference        none")
+    return lines
+
+
+def cmd_show(args) -> int:
+    """``flexbody show SCENE``: what the scene models, its parameters and reference (builds, does not run)."""
+    source = _open(args.scene)
+    scene = _build(source, {})
+    for line in show_lines(source, scene):
+        print(line)
     return 0
 
 
@@ -375,7 +467,8 @@ def cmd_run(args) -> int:
     analysis) or 128 + the signal number (SIGINT, SIGTERM)."""
     t0 = time.perf_counter()
     params = _parse_sets(args.set or [])
-    outputs = {"--json": args.json, "--h5": args.h5, "--rerun": args.rerun}
+    json_to_stdout = args.json == "-"
+    outputs = {"--json": None if json_to_stdout else args.json, "--h5": args.h5, "--rerun": args.rerun}
     xdmf = getattr(args, "xdmf", None)
     if xdmf:
         from flexbody.outputs.xdmf import heavy_data_path
@@ -409,7 +502,8 @@ def cmd_run(args) -> int:
     try:
         recorder = RunRecorder(scene, h5=args.h5, rerun=args.rerun, directors=args.directors,
                                warn=lambda message: print(f"flexbody: warning: {message}", file=sys.stderr),
-                               xdmf=xdmf, stresses=getattr(args, "stresses", False))
+                               xdmf=xdmf, stresses=getattr(args, "stresses", False),
+                               rerun_color=getattr(args, "rerun_color", "deformation"))
     except (OSError, ImportError, ValueError) as exc:
         raise CliError(str(exc).splitlines()[0]) from None
     failure = None
@@ -435,12 +529,15 @@ def cmd_run(args) -> int:
                  if recorder.paths else "")
         print(f"flexbody: {failure}{where}", file=sys.stderr)
         return code
+    human = sys.stderr if json_to_stdout else sys.stdout   # --json -: standard output is the JSON alone
     for line in summary_lines(summary):
-        print(line)
-    print(f"total time       {time.perf_counter() - t0:.2f} s (including setup and compilation)")
+        print(line, file=human)
+    print(f"total time       {time.perf_counter() - t0:.2f} s (including setup and compilation)", file=human)
     for path in recorder.paths:
-        print(f"written          {path}")
-    if args.json:
+        print(f"written          {path}", file=human)
+    if json_to_stdout:
+        _write_json_stdout(summary.as_dict())
+    elif args.json:
         _write_json(args.json, summary.as_dict())
         print(f"written          {args.json}")
     if not summary.result.converged:
@@ -1148,17 +1245,26 @@ def _cluster_arguments(parser, default: str) -> None:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="flexbody", description="List, run, bench and compare shell scenes.",
                                      epilog="Scene files: docs/scenes.md. Output formats: docs/output_formats.md.")
+    from flexbody import __version__
+    parser.add_argument("--version", action="version", version=f"flexbody {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     sub.add_parser("list", help="the built-in scenes").set_defaults(func=cmd_list)
+    show = sub.add_parser("show", help="what a scene models: its parameters (defaults, units) and reference")
+    show.add_argument("scene", help="built-in scene or .toml/.py scene file")
+    show.set_defaults(func=cmd_show)
 
     run = sub.add_parser("run", help="run a scene and report error against run time")
     run.add_argument("scene", nargs="?", default=DEFAULT_SCENE,
                      help=f"built-in scene or .toml/.py scene file (default {DEFAULT_SCENE})")
     run.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a scene parameter (repeatable)")
-    run.add_argument("--json", metavar="FILE", help="write the run summary as JSON")
+    run.add_argument("--json", metavar="FILE", help="write the run summary as JSON ('-': to standard output, "
+                     "the printed summary then goes to standard error)")
     run.add_argument("--h5", metavar="FILE.h5", help="write the mesh and every step to an HDF5 file")
     run.add_argument("--rerun", metavar="FILE.rrd", help="write a rerun recording (needs rerun-sdk)")
     run.add_argument("--directors", action="store_true", help="with --rerun: also log the directors")
+    run.add_argument("--rerun-color", choices=["deformation", "displacement", "stress"], default="deformation",
+                     help="with --rerun: colour by the displacement without the rigid motion (default), by |x - X0| "
+                     "or by the von Mises fibre stress")
     run.add_argument("--xdmf", metavar="FILE.xdmf", help="write an XDMF time series for ParaView (arrays in "
                      "FILE.xdmf.h5; needs meshio)")
     run.add_argument("--stresses", action="store_true", help="with --h5: also write the stress resultants and "

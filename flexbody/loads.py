@@ -92,7 +92,29 @@ def pressure_contribution(mesh, x: np.ndarray, p: float, elements=None):
     """Global nodal forces F (n, 3) of a follower pressure and per-element dF_I/dx_J (m, 6, 6, 3, 3).
 
     F_I = p int N_I (x_,r x x_,s) dr ds;  dF_I/dx_J = p int N_I (N_J,s hat(x_,r) - N_J,r hat(x_,s)) dr ds.
+
+    All elements and Gauss points at once (numpy); :func:`pressure_contribution_reference` is the same
+    integral element by element and point by point, the readable form this one is tested against.
     """
+    elems = np.arange(mesh.n_elements) if elements is None else np.asarray(elements, int)
+    conn = mesh.elements[elems]                                  # (k, 6)
+    X = x[conn]                                                  # (k, 6, 3)
+    xr = np.einsum("gi,kia->kga", _PRESSURE_DN[:, 0], X)         # (k, 7, 3) x_,r at the Gauss points
+    xs = np.einsum("gi,kia->kga", _PRESSURE_DN[:, 1], X)
+    wN = p * _PRESSURE_W[:, None] * _PRESSURE_N                  # (7, 6) p w_g N_I(g)
+    Fe = np.einsum("gi,kga->kia", wN, np.cross(xr, xs))          # (k, 6, 3)
+    F = np.zeros((mesh.n_nodes, 3))
+    for a in range(3):
+        F[:, a] = np.bincount(conn.ravel(), Fe[:, :, a].ravel(), minlength=mesh.n_nodes)
+    # dF_IJ = sum_g p w_g N_I (N_J,s hat(x_,r) - N_J,r hat(x_,s))
+    H = np.einsum("gj,kgab->kgjab", _PRESSURE_DN[:, 1], so3.hat_many(xr)) \
+        - np.einsum("gj,kgab->kgjab", _PRESSURE_DN[:, 0], so3.hat_many(xs))   # (k, 7, 6, 3, 3)
+    dF = np.einsum("gi,kgjab->kijab", wN, H)
+    return F, dF, elems
+
+
+def pressure_contribution_reference(mesh, x: np.ndarray, p: float, elements=None):
+    """:func:`pressure_contribution` element by element and Gauss point by Gauss point (the reference)."""
     elems = np.arange(mesh.n_elements) if elements is None else np.asarray(elements, int)
     pts, wts = gauss_triangle_7()
     F = np.zeros((mesh.n_nodes, 3))
@@ -108,3 +130,8 @@ def pressure_contribution(mesh, x: np.ndarray, p: float, elements=None):
             Hr, Hs = so3.hat(xr), so3.hat(xs)
             dF[k] += p * w * np.einsum("i,jab->ijab", N, dN[1][:, None, None] * Hr - dN[0][:, None, None] * Hs)
     return F, dF, elems
+
+
+_PRESSURE_POINTS, _PRESSURE_W = gauss_triangle_7()
+_PRESSURE_N = np.array([shape_functions(r, s) for r, s in _PRESSURE_POINTS])      # (7, 6)
+_PRESSURE_DN = np.array([shape_derivatives(r, s) for r, s in _PRESSURE_POINTS])   # (7, 2, 6)

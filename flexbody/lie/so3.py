@@ -176,6 +176,15 @@ def hat(v: np.ndarray) -> np.ndarray:
                      [-v[1], v[0], 0.0]])
 
 
+def hat_many(v: np.ndarray) -> np.ndarray:
+    """:func:`hat` of each vector of v (..., 3) -> (..., 3, 3)."""
+    out = np.zeros(v.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
 def vee(W: np.ndarray) -> np.ndarray:
     """Axial vector of a skew matrix (inverse of :func:`hat`; the skew part is used)."""
     return 0.5 * np.array([W[2, 1] - W[1, 2], W[0, 2] - W[2, 0], W[1, 0] - W[0, 1]])
@@ -309,3 +318,63 @@ def update_frame(R: np.ndarray, th: np.ndarray) -> np.ndarray:
 def director(R: np.ndarray) -> np.ndarray:
     """Director of a nodal frame: its third column ``R e3``."""
     return R[:, 2].copy()
+
+
+# ----------------------------------------------------------------------------------------------------------
+# The maps for many rotation vectors / matrices at once (numpy, same formulas as the single versions)
+# ----------------------------------------------------------------------------------------------------------
+
+
+def _closed_or_series(name: str, p: np.ndarray, closed) -> np.ndarray:
+    """Coefficient ``name`` at every angle of ``p``: its series below SERIES_SWITCH, ``closed(p)`` above."""
+    small = p < SERIES_SWITCH
+    out = np.polyval(SERIES[name][::-1], p * p)
+    if not small.all():
+        big = p[~small]
+        out[~small] = closed(big)
+    return out
+
+
+def exp_many(phi: np.ndarray) -> np.ndarray:
+    """:func:`exp` of each rotation vector of ``phi`` (..., 3) -> (..., 3, 3)."""
+    p = np.linalg.norm(phi, axis=-1)
+    W = hat_many(phi)
+    a1_ = _closed_or_series("a1", p, lambda q: np.sin(q) / q)
+    a2_ = _closed_or_series("a2", p, lambda q: 2.0 * np.sin(0.5 * q) ** 2 / q**2)
+    return np.eye(3) + a1_[..., None, None] * W + a2_[..., None, None] * (W @ W)
+
+
+def tangent_many(phi: np.ndarray) -> np.ndarray:
+    """:func:`tangent` of each rotation vector of ``phi`` (..., 3) -> (..., 3, 3)."""
+    p = np.linalg.norm(phi, axis=-1)
+    W = hat_many(phi)
+    a2_ = _closed_or_series("a2", p, lambda q: 2.0 * np.sin(0.5 * q) ** 2 / q**2)
+    a3_ = _closed_or_series("a3", p, lambda q: (q - np.sin(q)) / q**3)
+    return np.eye(3) - a2_[..., None, None] * W + a3_[..., None, None] * (W @ W)
+
+
+def log_many(R: np.ndarray) -> np.ndarray:
+    """:func:`log` of each rotation matrix of ``R`` (..., 3, 3) -> (..., 3) (Shepperd's quaternion)."""
+    R = np.asarray(R, dtype=float)
+    t = R[..., 0, 0] + R[..., 1, 1] + R[..., 2, 2]
+    k = np.argmax(np.stack([t, R[..., 0, 0], R[..., 1, 1], R[..., 2, 2]], axis=-1), axis=-1)
+    d = lambda i, j: R[..., i, j] - R[..., j, i]
+    a = lambda i, j: R[..., i, j] + R[..., j, i]
+    with np.errstate(divide="ignore", invalid="ignore"):   # the candidates not chosen may divide by 0
+        return _log_from_candidates(R, t, k, d, a)
+
+
+def _log_from_candidates(R, t, k, d, a) -> np.ndarray:
+    big = [0.5 * np.sqrt(np.maximum(1.0 + t, 0.0))] + \
+        [0.5 * np.sqrt(np.maximum(1.0 + 2 * R[..., i, i] - t, 0.0)) for i in range(3)]
+    cand = [np.stack([4 * big[0] ** 2, d(2, 1), d(0, 2), d(1, 0)], axis=-1) / (4 * big[0])[..., None],
+            np.stack([d(2, 1), 4 * big[1] ** 2, a(0, 1), a(0, 2)], axis=-1) / (4 * big[1])[..., None],
+            np.stack([d(0, 2), a(0, 1), 4 * big[2] ** 2, a(1, 2)], axis=-1) / (4 * big[2])[..., None],
+            np.stack([d(1, 0), a(0, 2), a(1, 2), 4 * big[3] ** 2], axis=-1) / (4 * big[3])[..., None]]
+    q = np.choose(k[..., None], cand)
+    q = np.where(q[..., :1] < 0, -q, q)
+    s = np.linalg.norm(q[..., 1:], axis=-1)
+    w = q[..., 0]
+    tt = np.where(w > 0.0, s / w, np.inf)
+    scale = np.where(tt < 1e-5, 2.0 / w * (1.0 - tt * tt / 3.0 + tt**4 / 5.0), 2.0 * np.arctan2(s, w) / s)
+    return scale[..., None] * q[..., 1:]

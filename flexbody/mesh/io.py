@@ -1,8 +1,9 @@
 """Mesh files: gmsh ``.msh`` (and anything meshio reads) in, ``.msh``/VTU/XDMF/... out.
 
 Import takes six-node triangles ("triangle6") as they are and upgrades three-node triangles ("triangle") to
-six-node ones with straight-edged midside nodes. Physical groups of gmsh become named sets: a group of line
-elements ("line" / "line3") becomes an edge set (and node set), a group of points a node set. Directors are
+six-node ones with straight-edged midside nodes. Physical groups of gmsh become named sets: a group of
+triangles (a physical surface) an element set, a group of line elements ("line" / "line3") an edge set (and
+node set), a group of points a node set. Directors are
 read from the point data "directors" when the file has them (files written by :func:`write_mesh`), else
 they are the nodal average of the adjacent element normals, oriented like the elements' corner order.
 
@@ -193,6 +194,10 @@ def _mesh_from_meshio(m, where: str, allow_coincident_nodes: bool) -> Tri6Mesh:
     if tri6 and tri3:
         raise MeshError(f"{where} mixes three- and six-node triangles")
     if not tri6 and not tri3:
+        if any(t in ("line", "line3") for t in types) and m.cell_data.get("gmsh:physical"):
+            raise MeshError(f"{where} has no triangles, only line/point physical groups: gmsh saves only the "
+                            "elements of physical groups once one exists; add a physical surface group "
+                            "(Physical Surface, gmsh.model.addPhysicalGroup(2, ...)) or set Mesh.SaveAll = 1")
         raise MeshError(f"{where} has no triangles (cell types: {types or 'none'})")
     n_file = len(nodes)
     cells = np.vstack(tri6 or tri3)
@@ -203,7 +208,7 @@ def _mesh_from_meshio(m, where: str, allow_coincident_nodes: bool) -> Tri6Mesh:
         elements = cells.astype(np.int64)
     else:
         nodes, elements = upgrade_to_tri6(nodes, cells)
-    node_sets, edge_sets = _physical_sets(m, elements, where)
+    node_sets, edge_sets, element_sets = _physical_sets(m, elements, where)
     # drop nodes that no element uses (gmsh keeps geometry points), renumbering everything
     used = np.unique(elements)
     keep = np.arange(len(nodes))
@@ -221,19 +226,21 @@ def _mesh_from_meshio(m, where: str, allow_coincident_nodes: bool) -> Tri6Mesh:
         directors = d[keep]
     if directors is None:
         directors = averaged_directors(nodes, elements)
-    return Tri6Mesh(nodes, elements, directors, node_sets, edge_sets, allow_coincident_nodes)
+    return Tri6Mesh(nodes, elements, directors, node_sets, edge_sets, allow_coincident_nodes, element_sets)
 
 
 def _physical_sets(m, elements: np.ndarray, where: str):
     """Named sets from gmsh physical groups (field_data name -> [tag, dim], cell_data['gmsh:physical']).
 
-    gmsh numbers physical groups per dimension, so a group is identified by (tag, dimension).
+    gmsh numbers physical groups per dimension, so a group is identified by (tag, dimension). A group of
+    triangles becomes an element set (indices into the file's triangles, in their order).
     """
     node_sets: dict[str, np.ndarray] = {}
     edge_sets: dict[str, np.ndarray] = {}
+    element_sets: dict[str, np.ndarray] = {}
     phys = m.cell_data.get("gmsh:physical")
     if not phys or not m.field_data:
-        return node_sets, edge_sets
+        return node_sets, edge_sets, element_sets
     names = {}
     for k, v in m.field_data.items():
         v = np.asarray(v).ravel()
@@ -242,8 +249,19 @@ def _physical_sets(m, elements: np.ndarray, where: str):
     # element edges as (corner, corner) -> (corner, midside, corner) in element orientation
     triples = elements[:, ELEMENT_EDGES].reshape(-1, 3)
     lookup = {(int(a), int(b)): (int(a), int(mid), int(b)) for a, mid, b in triples}
+    tri_type = "triangle6" if any(c.type == "triangle6" for c in m.cells) else "triangle"
+    first = 0                                            # the index of the block's first element
     for block, tags in zip(m.cells, phys):
         tags = np.asarray(tags).ravel()
+        if block.type == tri_type:
+            if len(tags) == len(block.data):
+                for tag in np.unique(tags):
+                    name = names.get((int(tag), 2))
+                    if name is not None:
+                        idx = first + np.flatnonzero(tags == tag)
+                        element_sets[name] = np.concatenate([element_sets.get(name, np.array([], int)), idx])
+            first += len(block.data)
+            continue
         if block.type not in ("vertex", "line", "line3") or len(tags) != len(block.data):
             continue
         for tag in np.unique(tags):
@@ -267,15 +285,15 @@ def _physical_sets(m, elements: np.ndarray, where: str):
                 prev = edge_sets.get(name, np.zeros((0, 3), np.int64))
                 edge_sets[name] = np.vstack([prev, np.array(edges, dtype=np.int64).reshape(-1, 3)])
                 node_sets[name] = np.unique(edge_sets[name])
-    return node_sets, edge_sets
+    return node_sets, edge_sets, element_sets
 
 
 def write_mesh(mesh: Tri6Mesh, path: str | Path, point_data: dict[str, np.ndarray] | None = None) -> None:
     """Write the mesh (six-node triangles, directors as point data) to any format meshio writes by suffix
     (``.vtu`` for ParaView, ``.msh``, ``.xdmf``...). Extra nodal fields go in ``point_data``.
 
-    ``.msh`` is written as gmsh 2.2 ASCII with the edge sets as physical line groups (line3 cells) and the
-    other node sets as physical point groups, so :func:`read_mesh` gives back the mesh, its directors and
+    ``.msh`` is written as gmsh 2.2 ASCII with the element sets as physical surface groups, the edge sets as
+    physical line groups (line3 cells) and the other node sets as physical point groups, so :func:`read_mesh` gives back the mesh, its directors and
     its sets.
     """
     meshio = _meshio()
@@ -314,6 +332,16 @@ def _write_gmsh(meshio, mesh: Tri6Mesh, path: Path, data: dict[str, np.ndarray],
     physical, geometrical = [np.zeros(mesh.n_elements, dtype=int)], [np.zeros(mesh.n_elements, dtype=int)]
     field_data = {}
     tag = 0
+    for name, elems in mesh.element_sets.items():        # physical surfaces: one tag per triangle
+        if _bad_name(name):
+            raise MeshError(f"{where}: the set name {name!r} cannot be written to gmsh")
+        tag += 1
+        if np.any(physical[0][elems] != 0):
+            raise MeshError(f"{where}: element set {name!r} overlaps another element set, which gmsh physical "
+                            "surfaces (one per triangle) cannot express")
+        physical[0][elems] = tag
+        geometrical[0][elems] = tag
+        field_data[name] = np.array([tag, 2])
     for name, edges in mesh.edge_sets.items():
         tag += 1
         cells.append(("line3", np.asarray(edges)[:, [0, 2, 1]]))   # gmsh line3: end, end, middle

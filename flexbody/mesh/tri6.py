@@ -48,6 +48,7 @@ class Tri6Mesh:
     edge_sets : named sets of element edges, each a (k, 3) array of (corner, midside, corner) triples
     allow_coincident_nodes : a deliberate slit or crack (the slit annular plate) has distinct coincident
         nodes on its two lips; otherwise coincident nodes are reported as duplicates.
+    element_sets : named sets of element indices (e.g. gmsh's physical surface groups)
     """
 
     nodes: np.ndarray
@@ -56,6 +57,7 @@ class Tri6Mesh:
     node_sets: Mapping[str, np.ndarray] = field(default_factory=dict)
     edge_sets: Mapping[str, np.ndarray] = field(default_factory=dict)
     allow_coincident_nodes: bool = False
+    element_sets: Mapping[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         nodes = _as_array(self.nodes, float, "nodes")
@@ -69,13 +71,16 @@ class Tri6Mesh:
             raise MeshError(f"directors must have the shape of nodes {nodes.shape}, got {directors.shape}")
         node_sets = {str(k): _as_array(v, int, f"node set {k!r}").ravel() for k, v in self.node_sets.items()}
         edge_sets = {str(k): _as_array(v, int, f"edge set {k!r}").reshape(-1, 3) for k, v in self.edge_sets.items()}
-        for arr in (nodes, elements, directors, *node_sets.values(), *edge_sets.values()):
+        element_sets = {str(k): _as_array(v, int, f"element set {k!r}").ravel()
+                        for k, v in self.element_sets.items()}
+        for arr in (nodes, elements, directors, *node_sets.values(), *edge_sets.values(), *element_sets.values()):
             arr.flags.writeable = False
         object.__setattr__(self, "nodes", nodes)
         object.__setattr__(self, "elements", elements)
         object.__setattr__(self, "directors", directors)
         object.__setattr__(self, "node_sets", node_sets)
         object.__setattr__(self, "edge_sets", edge_sets)
+        object.__setattr__(self, "element_sets", element_sets)
         validate(self)
 
     # -- sizes ------------------------------------------------------------------------------------------
@@ -103,6 +108,13 @@ class Tri6Mesh:
             raise MeshError(f"unknown edge set {name!r}; this mesh has edge sets: {known}")
         return self.edge_sets[name]
 
+    def element_set(self, name: str) -> np.ndarray:
+        """The element indices of a named element set."""
+        if name not in self.element_sets:
+            known = ", ".join(sorted(self.element_sets)) or "none"
+            raise MeshError(f"unknown element set {name!r}; this mesh has element sets: {known}")
+        return self.element_sets[name]
+
     def nearest_node(self, point) -> int:
         """Index of the node nearest to ``point`` (3,), which must lie within ``NEAR_LIMIT`` model sizes of
         the mesh (farther away the distances overflow or round to one value, and any node could win)."""
@@ -121,7 +133,7 @@ class Tri6Mesh:
                   edge_sets: Mapping[str, np.ndarray] | None = None) -> "Tri6Mesh":
         """A copy with more named sets (existing names are replaced)."""
         return Tri6Mesh(self.nodes, self.elements, self.directors, {**self.node_sets, **(node_sets or {})},
-                        {**self.edge_sets, **(edge_sets or {})}, self.allow_coincident_nodes)
+                        {**self.edge_sets, **(edge_sets or {})}, self.allow_coincident_nodes, self.element_sets)
 
     # -- topology ---------------------------------------------------------------------------------------
     def connected_components(self) -> tuple[int, np.ndarray]:
@@ -329,6 +341,11 @@ def _check_sets(mesh: Tri6Mesh) -> None:
         bad = idx[(idx < 0) | (idx >= n)]
         if bad.size:
             raise MeshError(f"node set {name!r} refers to node {bad[0]}, which does not exist")
+    for name, idx in mesh.element_sets.items():
+        bad = idx[(idx < 0) | (idx >= mesh.n_elements)]
+        if bad.size:
+            raise MeshError(f"element set {name!r} refers to element {bad[0]}, which does not exist "
+                            f"({mesh.n_elements} elements)")
     if not mesh.edge_sets:
         return
     triples = mesh.elements[:, ELEMENT_EDGES].reshape(-1, 3)

@@ -20,6 +20,8 @@ from collections.abc import Callable
 import os
 import warnings
 
+import numpy as np
+
 
 class OutputPathError(ValueError):
     """An output file that cannot be written; the message is one line naming the option and the path."""
@@ -131,6 +133,8 @@ class RunRecorder:
     warn : called with a one-line message when the recording fails and is closed (default: a warning)
     xdmf : path of an XDMF time series for ParaView (:mod:`flexbody.outputs.xdmf`, needs meshio), or None
     stresses : also write the stress resultants and reactions of every step to the HDF5 file
+    rerun_color : what the recording's colours show: "deformation" (default), "displacement" or "stress" (the
+        von Mises fibre stress, :func:`flexbody.results.stress_resultants`) (:mod:`flexbody.outputs.rerun_log`)
 
     Use as a context manager; pass :meth:`on_step` to ``run_scene``.
 
@@ -140,11 +144,14 @@ class RunRecorder:
     """
 
     def __init__(self, scene, h5: str | None = None, rerun: str | None = None, directors: bool = False,
-                 warn: Callable[[str], None] | None = None, xdmf: str | None = None, stresses: bool = False):
+                 warn: Callable[[str], None] | None = None, xdmf: str | None = None, stresses: bool = False,
+                 rerun_color: str = "deformation"):
         self.scene = scene
+        self.rerun_color = rerun_color
         self.stresses = bool(stresses)
         self._xdmf = None
         self._gravity = None
+        self._energy0 = None           # T + W + V_g + D of the first logged dynamic step (the drift's origin)
         self._warn = warn or (lambda message: warnings.warn(message, RuntimeWarning, stacklevel=3))
         self.kind = getattr(scene, "kind", "static")
         self.names = [o.name for o in scene.outputs]
@@ -177,7 +184,7 @@ class RunRecorder:
                 if scene.reference is not None:
                     reference = {k: (scene.reference.load_factors, v) for k, v in scene.reference.values.items()}
                 self._rrd = RerunLogger(rerun, mesh, scene.name, directors=directors, reference=reference,
-                                        kind=self.kind)
+                                        kind=self.kind, outputs=self.names, color_by=rerun_color)
         except BaseException:
             self.close()
             raise
@@ -216,11 +223,30 @@ class RunRecorder:
                 self._drop_xdmf(exc)
         if self._rrd is not None:
             try:
-                self._rrd.log_step(rec.step, where, state, tracked)
+                self._rrd.log_step(rec.step, where, state, tracked, self._energy_stats(rec), self._colour_field(state))
                 self._rrd.flush()
             except Exception as exc:  # a recording is for looking: it never stops the solve
                 self._drop_recording(exc)
         self.steps_written += 1
+
+    def _colour_field(self, state) -> np.ndarray | None:
+        """The nodal von Mises fibre stress (the larger of top and bottom) when the recording is coloured by it."""
+        if self.rerun_color != "stress":
+            return None
+        from flexbody.results import stress_resultants
+        r = stress_resultants(self.scene.model.body, state)
+        return np.maximum(r.von_mises_top, r.von_mises_bottom)
+
+    def _energy_stats(self, rec) -> dict[str, float] | None:
+        """The energies of a dynamic step and the drift of T + W + V_g + D from its first value (rerun plots)."""
+        if self.kind != "dynamic":
+            return None
+        stats = {k: v for k, v in dynamic_stats(rec).items() if k.endswith("_energy")}
+        balance = float(rec.total_energy + rec.dissipated_energy)
+        if self._energy0 is None:
+            self._energy0 = balance
+        stats["energy_drift"] = balance - self._energy0
+        return stats
 
     def _residual(self, state, lam: float) -> float:
         """The work norm of the static residual r(q, lam) on the free DoFs of the state written."""

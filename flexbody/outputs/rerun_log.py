@@ -5,11 +5,12 @@ The recording is written to a file only: no viewer is spawned, nothing goes over
 
 Timelines
     ``step``         sequence: the solver's step number
-    ``load_factor``  (kind "static") duration timeline whose value *in seconds* is the load factor (rerun has
-                     no floating-point timelines; the viewer shows e.g. 0.35 as "0.350s"; resolution 1e-9).
-                     On a snap-back path (arc length) it is not monotonic: use ``step`` to replay in order.
-                     Values beyond +-:data:`TIMELINE_LIMIT` (int64 nanoseconds) are clamped to it; the
-                     ``step`` timeline and the logged outputs are exact.
+    ``load_factor``  (kind "static") sequence timeline: the load factor in millionths (rerun has no
+                     floating-point timelines; 1 000 000 is the full load, 350 000 a load factor of 0.35).
+                     The exact value is the ``stats/load_factor`` plot and the legend's text. On a
+                     snap-back path (arc length) it is not monotonic: use ``step`` to replay in order.
+                     Values beyond +-:data:`TIMELINE_LIMIT` are clamped to it; the ``step`` timeline and the
+                     logged outputs are exact.
     ``time``         (kind "dynamic") duration timeline: the simulated time in seconds.
     (rerun also adds its own ``log_time``, the wall-clock time of logging.)
 
@@ -19,14 +20,25 @@ Entity paths
                              their front faces are on the side of the reference directors). Per step:
                              ``vertex_positions`` (the nodal positions x, one vertex per node),
                              ``vertex_normals`` (the current directors) and ``vertex_colors`` (colour map of
-                             the displacement magnitude |x - X0|, unless ``color_by=None``).
+                             ``color_by``: "deformation" (default) the displacement without the rigid motion,
+                             |x - c - Q (X0 - C)| with the best-fit rotation Q and centroids c, C (Kabsch);
+                             "displacement" |x - X0|; None a uniform colour).
+    ``body/legend``          TextDocument, per step: what the colours show and the values of both ends of the
+                             scale. The scale is fixed: ``color_range`` if given, else [0, the largest value
+                             of all steps so far] (it never shrinks).
     ``body/directors``       Arrows3D, per step, if ``directors=True``: the directors at the nodes, drawn with
                              half the mean element edge length.
     ``outputs/<name>``       Scalars, per step: the tracked outputs.
     ``reference/<name>``     Scalars on the ``load_factor`` (or ``time``) timeline only, at the reference's own
                              load factors (styled as points), logged once at creation.
-    ``stats/max_displacement``  Scalars, per step: the largest |x - X0| (the top of the colour scale when the
-                             scale is automatic).
+    ``stats/max_displacement``  Scalars, per step: the largest |x - X0|; ``stats/max_deformation`` the largest
+                             displacement without the rigid motion; ``stats/load_factor`` (static) the load
+                             factor; ``stats/<name>`` (dynamic) the energies and their drift, as given.
+
+Blueprint
+    The 3D view of ``body`` takes three quarters of the window; beside it one plot per tracked output with
+    its reference overlaid (``outputs/<name>`` and ``reference/<name>``), and for a dynamic run a plot of the
+    energies and one of the energy drift (:func:`blueprint`).
 
 The recording is locked against a second writer (:mod:`flexbody.outputs.files`), and a step that the disk
 cannot hold is refused before anything of it is logged (:class:`flexbody.outputs.files.DiskFullError`):
@@ -43,16 +55,68 @@ from flexbody.outputs.files import check_free_space, lock_output, release
 
 # viridis at 0, 1/4, 1/2, 3/4, 1 (sRGB)
 _VIRIDIS = np.array([[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]], dtype=float)
-COLOR_BY = ("displacement", None)
+COLOR_BY = ("deformation", "displacement", "stress", None)
+COLOR_TEXT = {"deformation": "displacement without the rigid motion (Kabsch fit)",
+              "displacement": "displacement |x - X0|",
+              "stress": "von Mises fibre stress, the larger of top and bottom (nodal average)"}
+#: the energy plots of a dynamic run: ``stats/<name>`` entities
+ENERGY_STATS = ("kinetic_energy", "strain_energy", "gravity_energy", "total_energy")
+DRIFT_STATS = ("energy_drift",)
+LOAD_FACTOR_UNIT = 1_000_000        # the load_factor timeline counts millionths of the load factor
 UNIFORM_COLOR = (180, 180, 190)
 TIMELINES = {"static": "load_factor", "dynamic": "time"}
-#: the largest magnitude of a duration timeline, s (int64 nanoseconds end at 9.22e9 s)
+#: the largest magnitude of a timeline value (seconds of a duration: int64 nanoseconds end at 9.22e9 s; load
+#: factors: int64 millionths end at 9.22e12, clamped at the same 9.2e9 for one rule)
 TIMELINE_LIMIT = 9.2e9
 
 
 def timeline_seconds(values):
     """Load factors or times as durations in seconds rerun can store: clamped to +-TIMELINE_LIMIT."""
     return np.clip(values, -TIMELINE_LIMIT, TIMELINE_LIMIT)
+
+
+def load_factor_sequence(values) -> np.ndarray:
+    """Load factors as the ``load_factor`` sequence timeline: millionths, int64, clamped to +-TIMELINE_LIMIT."""
+    return np.rint(timeline_seconds(np.asarray(values, dtype=float)) * LOAD_FACTOR_UNIT).astype(np.int64)
+
+
+def rigid_fit(X: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The best-fit rigid motion x ~ c + Q (X - C) in the least-squares sense (Kabsch: the SVD of the
+    cross-covariance, with the sign that makes Q a rotation). Returns Q (3, 3), C (3,), c (3,)."""
+    C, c = X.mean(axis=0), x.mean(axis=0)
+    H = (X - C).T @ (x - c)
+    U, _, Vt = np.linalg.svd(H)
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T)) or 1.0])
+    return Vt.T @ D @ U.T, C, c
+
+
+def deformation(X: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """|x - c - Q (X - C)| (n,): each node's displacement without the body's best-fit rigid motion."""
+    Q, C, c = rigid_fit(X, x)
+    return np.linalg.norm(x - c - (X - C) @ Q.T, axis=1)
+
+
+def blueprint(outputs, kind: str = "static", references=()):
+    """The viewer layout (rerun.blueprint.Blueprint): the 3D view large, one plot per tracked output with its
+    reference overlaid, and for a dynamic run the energies and their drift."""
+    import rerun as rr
+    import rerun.blueprint as rrb
+    plots = []
+    for name in outputs:
+        part = rr.escape_entity_path_part(str(name))
+        contents = [f"/outputs/{part}"] + ([f"/reference/{part}"] if name in references else [])
+        plots.append(rrb.TimeSeriesView(name=str(name), origin="/", contents=contents))
+    if kind == "dynamic":
+        plots.append(rrb.TimeSeriesView(name="energies", origin="/",
+                                        contents=[f"/stats/{k}" for k in ENERGY_STATS]))
+        plots.append(rrb.TimeSeriesView(name="energy drift", origin="/",
+                                        contents=[f"/stats/{k}" for k in DRIFT_STATS]))
+    else:
+        plots.append(rrb.TimeSeriesView(name="load factor", origin="/", contents=["/stats/load_factor"]))
+    view = rrb.Spatial3DView(name="body", origin="/body")
+    side = rrb.Vertical(rrb.TextDocumentView(name="legend", origin="/body/legend"), *plots,
+                        row_shares=[1] + [2] * len(plots))
+    return rrb.Blueprint(rrb.Horizontal(view, side, column_shares=[3, 1]), collapse_panels=True)
 
 
 def colormap(values: np.ndarray, vmin: float, vmax: float) -> np.ndarray:
@@ -96,16 +160,19 @@ class RerunLogger:
     path : the .rrd file to write (overwritten)
     mesh : anything with ``.nodes`` (n, 3), ``.elements`` (m, 6) and ``.directors`` (n, 3)
     scene_name : the recording's name
-    color_by : "displacement" (|x - X0| through a viridis colour map) or None (uniform colour)
+    color_by : "deformation" (the displacement without the rigid motion, :func:`deformation`),
+        "displacement" (|x - X0|), "stress" (a nodal field given to :meth:`log_step`, e.g. the von Mises fibre
+        stress of :func:`flexbody.results.stress_resultants`), through a viridis colour map, or None (uniform)
     directors : also log the directors as arrows
     reference : reference curves {name: (load_factors, values)} (or times, for kind "dynamic")
     kind : "static" (``load_factor`` timeline) or "dynamic" (``time`` timeline)
-    color_range : (vmin, vmax) of the colour scale; None scales every step to [0, its max displacement]
+    color_range : (vmin, vmax) of the colour scale; None: [0, the largest value of the steps so far]
+    outputs : the names of the tracked outputs, for the blueprint's plots (None: no blueprint)
     """
 
-    def __init__(self, path, mesh, scene_name: str, color_by: str | None = "displacement",
+    def __init__(self, path, mesh, scene_name: str, color_by: str | None = "deformation",
                  directors: bool = False, reference: dict | None = None, *, kind: str = "static",
-                 color_range: tuple[float, float] | None = None):
+                 color_range: tuple[float, float] | None = None, outputs=None):
         if color_by not in COLOR_BY:
             raise ValueError(f"color_by must be one of {COLOR_BY}, got {color_by!r}")
         if kind not in TIMELINES:
@@ -122,6 +189,8 @@ class RerunLogger:
         self.color_by = color_by
         self.directors = bool(directors)
         self.color_range = None if color_range is None else (float(color_range[0]), float(color_range[1]))
+        self._scale_max = 0.0            # the automatic colour scale's top: the largest value so far
+        self.outputs = None if outputs is None else [str(o) for o in outputs]
         self.nodes = np.asarray(mesh.nodes, dtype=float)
         elements = np.asarray(mesh.elements)
         ref_directors = np.asarray(mesh.directors, dtype=float)
@@ -173,13 +242,26 @@ class RerunLogger:
     def _log_static(self, scene_name: str, curves: dict) -> None:
         rr, rec = self._rr, self._rec
         rec.send_recording_name(str(scene_name))
+        if self.outputs is not None:
+            rec.send_blueprint(blueprint(self.outputs, self.kind, tuple(curves)))
         # topology once, static; the positions are per step (static positions would shadow them)
         rec.log("body/mesh", rr.Mesh3D.from_fields(triangle_indices=self.triangles), static=True)
         for name, (params, values) in curves.items():
             entity = f"reference/{rr.escape_entity_path_part(name)}"
             rec.log(entity, rr.SeriesPoints(names=f"{name} (reference)"), static=True)
-            rec.send_columns(entity, indexes=[rr.TimeColumn(self.timeline, duration=timeline_seconds(params))],
-                             columns=rr.Scalars.columns(scalars=values))
+            rec.send_columns(entity, indexes=[self._time_column(params)], columns=rr.Scalars.columns(scalars=values))
+
+    def _time_column(self, params):
+        """The reference's own load factors (sequence, millionths) or times (duration, s) as a time column."""
+        if self.kind == "static":
+            return self._rr.TimeColumn(self.timeline, sequence=load_factor_sequence(params))
+        return self._rr.TimeColumn(self.timeline, duration=timeline_seconds(params))
+
+    def _set_time(self, value: float) -> None:
+        if self.kind == "static":
+            self._rec.set_time(self.timeline, sequence=int(load_factor_sequence(value)))
+        else:
+            self._rec.set_time(self.timeline, duration=float(timeline_seconds(float(value))))
 
     # -- context manager --------------------------------------------------------------------------------------
     def __enter__(self) -> "RerunLogger":
@@ -188,8 +270,11 @@ class RerunLogger:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def log_step(self, step: int, load_factor_or_time: float, state, tracked: dict[str, float] | None = None) -> None:
-        """Log one step: ``state`` has ``.x`` (n, 3) and ``.frames`` (n, 3, 3); ``tracked`` {name: value}."""
+    def log_step(self, step: int, load_factor_or_time: float, state, tracked: dict[str, float] | None = None,
+                 stats: dict[str, float] | None = None, field: np.ndarray | None = None) -> None:
+        """Log one step: ``state`` has ``.x`` (n, 3) and ``.frames`` (n, 3, 3); ``tracked`` {name: value};
+        ``stats`` {name: value} (e.g. the energies of a dynamic step) go to ``stats/<name>``; ``field`` (n,)
+        the nodal values the colours show when ``color_by="stress"``."""
         if self._closed:
             raise ValueError(f"rerun recording {self.path!r} is closed")
         rr, rec = self._rr, self._rec
@@ -199,18 +284,39 @@ class RerunLogger:
         d = np.asarray(state.frames, dtype=float)[:, :, 2]
         check_free_space(self.path, self._step_bytes(), "rerun recording", self.steps_logged)
         rec.set_time("step", sequence=int(step))
-        rec.set_time(self.timeline, duration=float(timeline_seconds(float(load_factor_or_time))))
+        self._set_time(load_factor_or_time)
         u = np.linalg.norm(x - self.nodes, axis=1)
         umax = float(u.max()) if u.size else 0.0
+        w = deformation(self.nodes, x) if len(x) >= 3 else u
+        wmax = float(w.max()) if w.size else 0.0
         if self.color_by is None:
             colors = np.broadcast_to(np.array(UNIFORM_COLOR, np.uint8), x.shape)
         else:
-            vmin, vmax = self.color_range if self.color_range is not None else (0.0, umax)
-            colors = colormap(u, vmin, vmax)
+            values = {"deformation": w, "displacement": u}.get(self.color_by)
+            if values is None:
+                values = np.asarray(field, dtype=float) if field is not None else None
+                if values is None or values.shape != (len(x),):
+                    raise ValueError(f"color_by='stress' needs a nodal field of shape ({len(x)},) per step, got "
+                                     f"{None if field is None else np.shape(field)}")
+            if np.isfinite(values).all():
+                self._scale_max = max(self._scale_max, float(values.max()) if values.size else 0.0)
+            vmin, vmax = self.color_range if self.color_range is not None else (0.0, self._scale_max)
+            colors = colormap(values, vmin, vmax)
+            where = (f"load factor {load_factor_or_time:.6g}" if self.kind == "static"
+                     else f"time {load_factor_or_time:.6g} s")
+            rec.log("body/legend", rr.TextDocument(
+                f"**{where}**\n\ncolour: {COLOR_TEXT[self.color_by]}\n\n"
+                f"scale: {vmin:.4g} (dark purple) .. {vmax:.4g} (yellow), fixed\n\n"
+                f"largest now: {float(values.max()) if values.size else 0.0:.4g}", media_type="text/markdown"))
         rec.log("body/mesh", rr.Mesh3D.from_fields(vertex_positions=x, vertex_normals=d, vertex_colors=colors))
         if self.directors:
             rec.log("body/directors", rr.Arrows3D(origins=x, vectors=self.arrow_length * d))
         rec.log("stats/max_displacement", rr.Scalars(umax))
+        rec.log("stats/max_deformation", rr.Scalars(wmax))
+        if self.kind == "static":
+            rec.log("stats/load_factor", rr.Scalars(float(load_factor_or_time)))
+        for name, value in (stats or {}).items():
+            rec.log(f"stats/{rr.escape_entity_path_part(str(name))}", rr.Scalars(float(value)))
         for name, value in (tracked or {}).items():
             rec.log(f"outputs/{rr.escape_entity_path_part(str(name))}", rr.Scalars(float(value)))
         self.steps_logged += 1

@@ -466,9 +466,26 @@ def _build_loads(tables: list[_Table], mesh) -> list:
             out += _nodal_loads(nodal_vectors_from_area(mesh, t.vector("density")), "force")
             t.done(["type", "density"])
         else:
-            out.append(FollowerPressure(t.number("value")))
-            t.done(["type", "value"])
+            out.append(FollowerPressure(t.number("value"), _pressure_elements(t, mesh)))
+            t.done(["type", "value", "set"])
     return out
+
+
+def _pressure_elements(t: _Table, mesh):
+    """The elements of a pressure load: all (no ``set``), or the element set(s) ``set`` names (a mesh file's
+    physical surface groups)."""
+    if not t.has("set"):
+        return None
+    names = t.raw("set")
+    names = [names] if isinstance(names, str) else names
+    if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
+        raise t.error("set", f"must be an element set name or a list of them, got {names!r}")
+    known = mesh.element_sets
+    for name in names:
+        if name not in known:
+            raise t.error("set", f"names element set {name!r}; the mesh has element sets: "
+                                 f"{', '.join(sorted(known)) or 'none'} (the physical surfaces of a mesh file)")
+    return np.unique(np.concatenate([known[n] for n in names]))
 
 
 def _build_newton(t: _Table | None):

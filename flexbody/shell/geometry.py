@@ -12,8 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexbody.lie import so3
 from flexbody.shell import mitc6
-from flexbody.shell.kinematics import covariant_strains, point_kinematics, relative_rotations
+from flexbody.shell.kinematics import (covariant_strains, covariant_strains_many, point_kinematics,
+                                       relative_rotations)
 from flexbody.shell.shape import gauss_triangle_7, shape_derivatives, shape_functions
 
 GAUSS_POINTS, GAUSS_WEIGHTS = gauss_triangle_7()
@@ -77,3 +79,40 @@ def element_geometry(x0: np.ndarray, frames0: np.ndarray) -> ElementGeometry:
         to_cart[g, 6:, 6:] = P
         weights[g] = GAUSS_WEIGHTS[g] * area
     return ElementGeometry(e_ref, to_cart, weights)
+
+
+def element_geometry_batch(x0_el: np.ndarray, frames0_el: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`element_geometry` of m elements at once (numpy over elements and points; the set-up of a model).
+
+    x0_el (m, 6, 3), frames0_el (m, 6, 3, 3) -> e_ref (m, 17, 8), to_cart (m, 7, 8, 8), weights (m, 7).
+    The same formulas as the element-by-element version (paper Eqs. 8, 9, 30), which is the reference.
+    """
+    m = len(x0_el)
+    R0 = frames0_el[:, 0]                                                   # (m, 3, 3)
+    d_nodes = np.zeros((m, 6, 3))
+    d_nodes[:, 1:] = so3.log_many(np.einsum("mba,mibc->miac", R0, frames0_el[:, 1:]))   # log(R_0^T R_I)
+    d = np.einsum("pi,mia->mpa", EVAL_N, d_nodes)                           # (m, 17, 3)
+    d_a = np.einsum("pbi,mia->mpba", EVAL_DN, d_nodes)                      # (m, 17, 2, 3)
+    x_a = np.einsum("pbi,mia->mpba", EVAL_DN, x0_el)                        # (m, 17, 2, 3)
+    R = np.einsum("mab,mpbc->mpac", R0, so3.exp_many(d))                    # R_0 exp(d)
+    F = np.concatenate([np.einsum("mpba,mpkb->mpka", R, x_a),               # R^T x_,a
+                        np.einsum("mpab,mpkb->mpka", so3.tangent_many(d), d_a)], axis=2)  # T d_,a
+    e_ref = covariant_strains_many(F)
+
+    G = x_a[:, GAUSS_OFFSET:]                                               # (m, 7, 2, 3) = (G_r, G_s)
+    normal = np.cross(G[..., 0, :], G[..., 1, :])
+    area = np.linalg.norm(normal, axis=-1)
+    n = normal / area[..., None]
+    t1 = G[..., 0, :] / np.linalg.norm(G[..., 0, :], axis=-1)[..., None]
+    t2 = np.cross(n, t1)
+    J = np.stack([np.einsum("...ka,...a->...k", G, t1), np.einsum("...ka,...a->...k", G, t2)], axis=-1)
+    P = np.linalg.inv(J)                                                    # (m, 7, 2, 2)
+    p00, p01, p10, p11 = P[..., 0, 0], P[..., 0, 1], P[..., 1, 0], P[..., 1, 1]
+    L = np.stack([np.stack([p00 * p00, p01 * p01, 2 * p00 * p01], -1),
+                  np.stack([p10 * p10, p11 * p11, 2 * p10 * p11], -1),
+                  np.stack([2 * p00 * p10, 2 * p01 * p11, 2 * (p00 * p11 + p01 * p10)], -1)], -2)
+    to_cart = np.zeros((m, N_GAUSS, 8, 8))
+    to_cart[..., :3, :3] = L
+    to_cart[..., 3:6, 3:6] = L
+    to_cart[..., 6:, 6:] = P
+    return e_ref, to_cart, GAUSS_WEIGHTS * area

@@ -163,6 +163,16 @@ def covariant_strains(F: np.ndarray) -> np.ndarray:
     ])
 
 
+def covariant_strains_many(F: np.ndarray) -> np.ndarray:
+    """:func:`covariant_strains` of many points at once: F (..., 4, 3) -> (..., 8)."""
+    fru, fsu, frw, fsw = (F[..., k, :] for k in range(4))
+    dot = lambda a, b: np.einsum("...a,...a->...", a, b)
+    bend = lambda a, b: dot(a, b @ HAT_E3.T)              # a . (HAT_E3 b)
+    return np.stack([0.5 * dot(fru, fru), 0.5 * dot(fsu, fsu), 0.5 * dot(fru, fsu),
+                     -bend(fru, frw), -bend(fsu, fsw), -0.5 * (bend(fru, fsw) + bend(fsu, frw)),
+                     fru[..., 2], fsu[..., 2]], axis=-1)
+
+
 def strain_gradient(F: np.ndarray) -> np.ndarray:
     """D = de/dF, shape (8, 12)."""
     fru, fsu, frw, fsw = F

@@ -161,5 +161,5 @@ def test_rerun_clamps_load_factors_beyond_its_timeline(tmp_path):
     for chunk in RrdReader(str(path)).stream().collect().stream():
         if chunk.entity_path == "/outputs/a":
             times += chunk.to_record_batch().column("load_factor").cast("int64").to_pylist()
-    limit = int(rerun_log.TIMELINE_LIMIT * 1e9)
-    assert sorted(times) == [-limit, int(1e9), limit]
+    limit = int(rerun_log.TIMELINE_LIMIT * rerun_log.LOAD_FACTOR_UNIT)     # the load factor in millionths
+    assert sorted(times) == [-limit, rerun_log.LOAD_FACTOR_UNIT, limit]

@@ -101,7 +101,7 @@ def test_recording_read_back(tmp_path):
     assert column(mesh_chunks, "Mesh3D:vertex_positions", static=True) == []  # positions are never static
     # positions, colors, normals: one row per step on the step and load_factor timelines
     assert column(mesh_chunks, "step", static=False) == [1, 2, 3]
-    assert column(mesh_chunks, "load_factor", static=False) == [250_000_000, 500_000_000, 750_000_000]  # ns
+    assert column(mesh_chunks, "load_factor", static=False) == [250_000, 500_000, 750_000]  # millionths
     pos = column(mesh_chunks, "Mesh3D:vertex_positions", static=False)
     assert len(pos) == 3
     for rows, st in zip(pos, sts):
@@ -121,7 +121,7 @@ def test_recording_read_back(tmp_path):
 
     refc = chunks["/reference/W_A"]
     assert column(refc, "Scalars:scalars", static=False) == [[0.0], [1.0], [2.0], [3.0]]
-    assert column(refc, "load_factor", static=False) == [100_000_000, 500_000_000, 1_000_000_000, 1_500_000_000]
+    assert column(refc, "load_factor", static=False) == [100_000, 500_000, 1_000_000, 1_500_000]
     assert column(refc, "step", static=False) == []  # the reference lives on the load_factor timeline only
     assert column(refc, "SeriesPoints:names", static=True) == [["W_A (reference)"]]
     assert len(column(chunks["/stats/max_displacement"], "Scalars:scalars", static=False)) == 3
@@ -150,6 +150,62 @@ def test_bad_arguments(tmp_path):
     with pytest.raises(OSError, match="no/such/dir"):
         RerunLogger(tmp_path / "no" / "such" / "dir" / "r.rrd", mesh, "square")
     with pytest.raises(ValueError, match="color_by"):
-        RerunLogger(tmp_path / "r.rrd", mesh, "square", color_by="stress")
+        RerunLogger(tmp_path / "r.rrd", mesh, "square", color_by="strain")
     with pytest.raises(ValueError, match="reference"):
         RerunLogger(tmp_path / "r.rrd", mesh, "square", reference={"W": ([0.1, 0.2], [1.0])})
+
+
+def test_deformation_removes_the_rigid_motion():
+    from flexbody.outputs.rerun_log import deformation, rigid_fit
+    rng = np.random.default_rng(4)
+    X = rng.normal(size=(30, 3))
+    Q = so3.exp([0.4, -1.9, 2.6])                           # a large rotation and a translation
+    x = X @ Q.T + [3.0, -1.0, 7.0]
+    assert np.allclose(rigid_fit(X, x)[0], Q, atol=1e-12) and deformation(X, x).max() < 1e-12
+    bump = np.zeros_like(X)
+    bump[5] = [0.0, 0.0, 1e-4]                               # plus a small deformation: it is what remains
+    w = deformation(X, x + bump)
+    others = np.delete(w, 5)
+    assert 0.8e-4 < w[5] < 1e-4 and others.max() < 0.15 * w[5]  # against a rigid displacement of ~9
+
+
+def test_blueprint_legend_energies_and_a_fixed_colour_scale(tmp_path):
+    pytest.importorskip("rerun")
+    import rerun.blueprint as rrb
+    from flexbody.outputs.rerun_log import RerunLogger, blueprint
+
+    assert isinstance(blueprint(["W_A"], "static", ("W_A",)), rrb.Blueprint)
+    assert isinstance(blueprint(["u"], "dynamic"), rrb.Blueprint)
+    mesh, path = square_mesh(), tmp_path / "bp.rrd"
+    ref = {"W_A": ([0.5, 1.0], [1.0, 2.0])}
+    sts = states(mesh, 3)
+    sts[2].x = mesh.nodes + 1e-3 * (sts[0].x - mesh.nodes)      # the last step deforms 1000x less
+    with RerunLogger(path, mesh, "square", reference=ref, outputs=["W_A"]) as log:
+        for i, st in enumerate(sts):
+            log.log_step(i + 1, 0.25 * (i + 1), st, {"W_A": float(i)})
+    chunks = read_chunks(path)
+    legend = column(chunks["/body/legend"], "TextDocument:text", static=False)
+    assert len(legend) == 3 and "load factor 0.75" in legend[2][0] and "without the rigid motion" in legend[0][0]
+    top = [float(t[0].split(" .. ")[1].split()[0]) for t in legend]
+    assert top[0] <= top[1] == top[2] > 0                    # the scale grows, never shrinks
+    assert column(chunks["/stats/load_factor"], "Scalars:scalars", static=False) == [[0.25], [0.5], [0.75]]
+    assert len(column(chunks["/stats/max_deformation"], "Scalars:scalars", static=False)) == 3
+    from rerun.chunk import RrdReader                         # the blueprint went into the file
+    assert [b.kind for b in RrdReader(str(path)).blueprints()] == ["blueprint"]
+
+
+def test_a_run_coloured_by_the_von_mises_stress(tmp_path, capsys):
+    pytest.importorskip("rerun")
+    from flexbody.cli import main
+    from flexbody.outputs.rerun_log import RerunLogger
+    path = tmp_path / "s.rrd"
+    assert main(["run", "cantilever_end_shear", "--set", "nx=4", "--set", "ny=1", "--set", "steps=2",
+                 "--rerun", str(path), "--rerun-color", "stress", "--quiet"]) == 0
+    legend = column(read_chunks(path)["/body/legend"], "TextDocument:text", static=False)
+    assert len(legend) == 2 and "von Mises" in legend[-1][0]
+    top = float(legend[-1][0].split(" .. ")[1].split()[0])
+    assert top > 0
+    mesh = square_mesh()
+    with RerunLogger(tmp_path / "f.rrd", mesh, "square", color_by="stress") as log:
+        with pytest.raises(ValueError, match="needs a nodal field of shape"):
+            log.log_step(1, 0.5, states(mesh, 1)[0], {})

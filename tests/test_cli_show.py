@@ -1,0 +1,44 @@
+"""flexbody show, --version, --json - (JSON alone on standard output) and the k/N progress lines."""
+
+import json
+
+import pytest
+
+from flexbody import __version__
+from flexbody.cli import main
+
+SMALL = ["--set", "nx=4", "--set", "ny=1", "--set", "steps=2"]
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0 and capsys.readouterr().out.strip() == f"flexbody {__version__}"
+
+
+def test_show_names_the_parameters_with_defaults_units_and_the_reference(capsys):
+    assert main(["show", "hemisphere"]) == 0
+    out = capsys.readouterr().out
+    assert "Sze 3.4" in out and "1681 nodes, 800 elements" in out
+    thickness = next(line for line in out.splitlines() if line.split()[:1] == ["thickness"])
+    assert thickness.split()[1:] == ["0.04", "length"]
+    assert next(line for line in out.splitlines() if line.startswith("reference")).split()[1] == "Sze"
+
+
+def test_show_of_a_bad_scene_is_one_line():
+    with pytest.raises(SystemExit, match="unknown scene 'nope'"):
+        main(["show", "nope"])
+
+
+def test_json_dash_writes_only_json_to_stdout(capsys):
+    assert main(["run", "cantilever_end_shear", *SMALL, "--json", "-"]) == 0
+    captured = capsys.readouterr()
+    data = json.loads(captured.out)
+    assert data["scene"] == "cantilever_end_shear" and data["steps"] == 2
+    assert "scene            cantilever_end_shear" in captured.err      # the summary went to stderr
+
+
+def test_progress_shows_k_of_n_and_the_time_left(capsys):
+    assert main(["run", "cantilever_end_shear", *SMALL]) == 0
+    lines = [line for line in capsys.readouterr().err.splitlines() if "load factor" in line]
+    assert [line.split()[1] for line in lines] == ["1/2", "2/2"] and all("left ~" in line for line in lines)
