@@ -285,6 +285,7 @@ class GeneralizedAlpha:
         self.params = AlphaParameters.from_rho_inf(self.settings.rho_inf)
         self.solver = LinearSolver()
         self.stats = NewtonStats() if stats is None else stats
+        self._transfer = None     # (factorized configuration, P): the map P of the step, made once per step
 
     def _refresh(self, step: _Step, t: float):
         """New tangent at the iterate, S = M beta' + C_t gamma' + K_t (T ~ I), factorized; returns the residual."""
@@ -305,12 +306,17 @@ class GeneralizedAlpha:
 
         With P the map of DoF components from the factorized configuration to the current one
         (``dyn.transfer``: the rigid rotation on translations, the frames' drilling drift on rotations),
-        S_now ~ P S_old P^T, so S_now^-1 ~ P S_old^-1 P^T.
+        S_now ~ P S_old P^T, so S_now^-1 ~ P S_old^-1 P^T. P is made at the step's first solve (after a refresh,
+        at the refresh's configuration) and kept for the step's later iterations: they move the body by the
+        Newton corrections only, and P enters the iteration matrix, not the residual (half of a solve's cost
+        was the Kabsch fit of ``dyn.transfer`` at every iteration).
         """
         dyn = self.dyn
         if not (self.settings.rotate_matrix and hasattr(dyn, "transfer")):
             return -self.solver.solve(r)
-        P = dyn.transfer(self._factorized_at, state)
+        if self._transfer is None or self._transfer[0] is not self._factorized_at:
+            self._transfer = (self._factorized_at, dyn.transfer(self._factorized_at, state))
+        P = self._transfer[1]
         return -dyn.apply_transfer(self.solver.solve(dyn.apply_transfer(r, P, transpose=True)), P)
 
     def step(self, q_n, v_n, vdot_n, a_n, t_n: float):
@@ -335,6 +341,7 @@ class GeneralizedAlpha:
         t = t_n + h
         bp, gp = p.beta_prime(h), p.gamma_prime(h)
         step = _predict(q_n, v_n, vdot_n, a_n, h, p, lambda q, x: _configuration(dyn, q, x, t))
+        self._transfer = None                     # a new P for this step (``_solve``)
         residuals, corrections, refreshes = [], [], 0
         any_fresh, need, prev = fresh, fresh, None
         eta = np.inf                              # no contraction estimate before the second correction
