@@ -48,10 +48,12 @@ def test_small_end_shear_moves_instead_of_converging_at_iteration_zero():
 
 def test_end_shear_beyond_double_precision_is_refused_not_zero():
     """thickness = 1e-6 (h/L = 1e-7, membrane/bending stiffness 1e14: the bending forces sink into the
-    membrane round-off): it gave W_tip = 0 with exit 0; now it stops with the report (or is right)."""
+    membrane round-off): it gave W_tip = 0 with exit 0; now it stops with the report (or is right). Which
+    report (no convergence, or a diverging residual) depends on the round-off of the set-up."""
     s = run_scene(cantilever_end_shear(thickness=1e-6, nx=8))
     w = s.history["W_tip"][-1] if s.history["W_tip"] else 0.0
-    assert (not s.result.converged and "no convergence" in s.result.message) or w == pytest.approx(6.70, rel=1e-2)
+    stopped = not s.result.converged and ("no convergence" in s.result.message or "diverging" in s.result.message)
+    assert stopped or w == pytest.approx(6.70, rel=1e-2)
     assert all(rec.iterations >= 1 for rec in s.result.records)
 
 
