@@ -190,11 +190,13 @@ def _strict_json(value):
 
 class _Progress:
     """Progress on stderr: the kernels' compilation notices (:meth:`notify`) and a line per step (call); the
-    steps' clock starts when the kernels are ready."""
+    steps' clock starts when the kernels are ready. With a ``goal`` (the last load factor of a load-controlled
+    path, or the end time of a dynamic run) each line shows how far the run is, in per cent of the goal, and
+    the time left at the rate so far (cut-backs and adaptive steps change the number of steps, not the goal)."""
 
-    def __init__(self, prefix: str = "", total: int | None = None) -> None:
+    def __init__(self, prefix: str = "", goal: float | None = None) -> None:
         self.prefix = prefix
-        self.total = total          # the number of steps, if known: the lines then show k/N and the time left
+        self.goal = goal
         self.t0 = time.perf_counter()
 
     def notify(self, notice) -> None:
@@ -206,36 +208,40 @@ class _Progress:
     def __call__(self, rec) -> None:
         if hasattr(rec, "time"):   # a dynamic step record
             where = f"time {rec.time:10.5g} s  iterations {rec.iterations:2d}  energy {rec.total_energy:11.5g}"
+            position = rec.time
         else:
             where = f"load factor {rec.load_factor:8.4f}  iterations {rec.iterations:2d}"
+            position = rec.load_factor
         elapsed = time.perf_counter() - self.t0
-        if self.total:
-            left = elapsed / max(rec.step, 1) * max(self.total - rec.step, 0)
-            print(f"{self.prefix}  step {rec.step:4d}/{self.total}  {where}  left ~{left:7.1f} s  "
+        if self.goal:
+            done = min(max(position / self.goal, 0.0), 1.0)
+            left = f"{elapsed * (1.0 - done) / done:7.1f} s" if done > 0 else "      ? s"
+            print(f"{self.prefix}  step {rec.step:4d}  {where}  {100 * done:5.1f} %  left ~{left}  "
                   f"elapsed {elapsed:7.2f} s", file=sys.stderr, flush=True)
         else:
             print(f"{self.prefix}  step {rec.step:4d}  {where}  {elapsed:7.2f} s", file=sys.stderr, flush=True)
 
 
-def _step_count(scene) -> int | None:
-    """The number of steps of a run, where it is known in advance (load control; a dynamic run)."""
+def _progress_goal(scene) -> float | None:
+    """Where a run ends, if known in advance: the last load factor of load control, the end time of a
+    dynamic run (None for arc length, whose load factor may turn back)."""
     a = scene.analysis
     if scene.kind == "static":
-        return len(a.load_factors) if a.method == "load_control" else None
-    steps = getattr(a, "end_time", 0.0) / getattr(a, "time_step", 0.0) if getattr(a, "time_step", 0.0) else 0
-    return int(math.floor(steps + 1e-9)) or None
+        return float(max(a.load_factors)) if a.method == "load_control" else None
+    end = getattr(a, "end_time", None)
+    return float(end) if end else None
 
 
-def _progress_printer(quiet: bool, prefix: str = "", total: int | None = None) -> _Progress | None:
+def _progress_printer(quiet: bool, prefix: str = "", goal: float | None = None) -> _Progress | None:
     """The progress printer on stderr (None with --quiet)."""
-    return None if quiet else _Progress(prefix, total)
+    return None if quiet else _Progress(prefix, goal)
 
 
 def _run_scene(scene, on_step=None, quiet: bool = False, prefix: str = "", started: float | None = None,
                restart=None):
     """``run_scene`` with the progress and compilation notices on stderr (none with ``quiet``)."""
     from flexbody.scenes.scene import run_scene
-    progress = _progress_printer(quiet, prefix, _step_count(scene))
+    progress = _progress_printer(quiet, prefix, _progress_goal(scene))
     notify = None if progress is None else progress.notify
     extra = {} if restart is None else {"restart": restart}
     return run_scene(scene, on_step=on_step, progress=progress, notify=notify, started=started, **extra)

@@ -38,7 +38,17 @@ def test_json_dash_writes_only_json_to_stdout(capsys):
     assert "scene            cantilever_end_shear" in captured.err      # the summary went to stderr
 
 
-def test_progress_shows_k_of_n_and_the_time_left(capsys):
+def test_progress_shows_how_far_and_the_time_left(capsys):
+    """Per cent of the last load factor (not k/N: cut-backs add steps) and the time left."""
     assert main(["run", "cantilever_end_shear", *SMALL]) == 0
-    lines = [line for line in capsys.readouterr().err.splitlines() if "load factor" in line]
-    assert [line.split()[1] for line in lines] == ["1/2", "2/2"] and all("left ~" in line for line in lines)
+    lines = [line for line in capsys.readouterr().err.splitlines() if "load factor" in line and "step" in line]
+    assert [line.split()[1] for line in lines] == ["1", "2"] and all("left ~" in line for line in lines)
+    assert [line.split("%")[0].split()[-1] for line in lines] == ["50.0", "100.0"]
+
+
+def test_progress_of_a_dynamic_run_counts_time(capsys):
+    assert main(["run", "spinning_plate", "--set", "end_time=0.004", "--quiet"]) in (0, 3)
+    assert "left ~" not in capsys.readouterr().err                      # --quiet: no progress
+    assert main(["run", "spinning_plate", "--set", "end_time=0.004"]) in (0, 3)
+    lines = [line for line in capsys.readouterr().err.splitlines() if line.strip().startswith("step")]
+    assert lines and lines[-1].split("%")[0].split()[-1] == "100.0"
