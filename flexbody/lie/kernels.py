@@ -20,10 +20,8 @@ from __future__ import annotations
 
 import math
 
-import numba
-
+from flexbody import _numba
 from flexbody.kernel_arrays import kernel_input, kernel_output
-from flexbody.kernel_cache import CACHE
 from flexbody.lie.so3 import SERIES, SERIES_SWITCH
 
 _SWITCH = SERIES_SWITCH
@@ -31,7 +29,7 @@ _A1, _A2, _A3, _A4 = SERIES["a1"], SERIES["a2"], SERIES["a3"], SERIES["a4"]
 _C2, _C3, _C4 = SERIES["c2"], SERIES["c3"], SERIES["c4"]
 _E2, _E3 = SERIES["e2"], SERIES["e3"]
 
-jit = numba.njit(cache=CACHE, fastmath=False)
+jit = _numba.plain  # numba's defaults (flexbody._numba)
 
 
 # ----------------------------------------------------------------------------------------------------------

@@ -40,7 +40,7 @@ The tangent-operator derivatives are the formulas of ``kernels.d_tangent_into`` 
 ``d2_tangent_into`` written with these precomputed coefficients (a point needs up to eight of them).
 
 Performance notes: the small helpers are inlined at numba-IR level so that the per-point functions contain no
-calls; the kernels are compiled without reference counting and with noalias array arguments (see _FLAGS), so
+calls; the kernels are compiled without reference counting and with noalias array arguments (see flexbody._numba), so
 that point data are read through views of the per-point arrays at no cost; the element loop runs inside one
 function per parallel chunk, whose workspaces are allocated once per chunk (a few chunks per thread), and
 prefetches the next element's data. Nothing is allocated per element or point. The section stiffness must be
@@ -51,18 +51,13 @@ from __future__ import annotations
 
 import math
 
-import llvmlite.binding
 import numba
-import numba.core.cgutils
-import numba.core.compiler
-import numba.core.cpu
-import numba.core.options
-import numba.extending
 import numpy as np
 from numba import prange
 
+from flexbody import _numba
+from flexbody._numba import prefetch as _prefetch
 from flexbody.kernel_arrays import kernel_input as _as
-from flexbody.kernel_cache import CACHE
 from flexbody.lie import kernels as lk
 from flexbody.lie.so3 import SERIES, SERIES_SWITCH
 from flexbody.shell.geometry import EVAL_DN, EVAL_N, GAUSS_OFFSET, N_GAUSS
@@ -71,53 +66,11 @@ from flexbody.shell.mitc6 import N_TYING
 N_EVAL = N_TYING + N_GAUSS
 NDOF = 36
 
-# The kernels below never allocate: they are compiled without reference counting where numba allows it
-# (``_nrt=False``; otherwise every array argument costs an atomic incref/decref per call). FMA contraction
-# is allowed (results agree with the numpy reference to round-off).
-_FLAGS = dict(cache=CACHE, error_model="numpy", fastmath={"contract"})
-if hasattr(numba.core.cpu.CPUTargetOptions, "_nrt"):
-    _FLAGS["_nrt"] = False
-# No two array arguments of a kernel overlap (workspaces are distinct arrays, inputs are only read): their data
-# pointers are declared ``noalias`` (numba's own compiler flag, set by its parfors lowering; not a jit option,
-# so it is mapped here). Without it LLVM must assume that every store may change every array: it reloads
-# values and guards the vector loops with run-time overlap checks (the kernel is 20 % slower).
-if hasattr(numba.core.compiler.Flags, "noalias") and hasattr(numba.core.options.TargetOptions, "Mapping"):
-    if not hasattr(numba.core.cpu.CPUTargetOptions, "_noalias"):
-        numba.core.cpu.CPUTargetOptions._noalias = numba.core.options.TargetOptions.Mapping("noalias")
-    _FLAGS["_noalias"] = True
-jit = numba.njit(**_FLAGS)
-inl = numba.njit(inline="always", **_FLAGS)
-_u = numba.uint64  # unsigned inner-loop indices with run-time bounds: lets LLVM vectorize the loops
-
-
-# llvm.prefetch is overloaded on the pointer type: "p0" with opaque pointers (LLVM >= 15), "p0i8" before
-_PREFETCH_NAME = "llvm.prefetch.p0" if llvmlite.binding.llvm_version_info >= (15,) else "llvm.prefetch.p0i8"
-
-
-@numba.extending.intrinsic
-def _prefetch(typingctx, arr, idx, write):
-    """Prefetch (into L2) the cache line of element idx of arr's data (flat index), to read or, write=True, to write.
-
-    A hint only (never faults, changes no result): the element loop prefetches the data of the elements ahead.
-    """
-    if not (isinstance(arr, numba.types.Array) and isinstance(idx, numba.types.Integer)
-            and isinstance(write, numba.types.BooleanLiteral)):
-        return None
-    rw = 1 if write.literal_value else 0
-
-    def codegen(context, builder, signature, args):
-        from llvmlite import ir
-        ary = context.make_array(signature.args[0])(context, builder, args[0])
-        i8p = ir.IntType(8).as_pointer()
-        i32 = ir.IntType(32)
-        size = context.get_abi_sizeof(context.get_data_type(signature.args[0].dtype))
-        ptr = builder.gep(builder.bitcast(ary.data, i8p), [builder.mul(args[1], ir.Constant(args[1].type, size))])
-        fnty = ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32])
-        fn = numba.core.cgutils.get_or_insert_function(builder.module, fnty, _PREFETCH_NAME)
-        builder.call(fn, [ptr, ir.Constant(i32, rw), ir.Constant(i32, 2), ir.Constant(i32, 1)])
-        return context.get_dummy_value()
-
-    return numba.types.void(arr, idx, write), codegen
+# The jit policy of flexbody._numba: the kernels below never allocate (no reference counting, noalias array
+# arguments: no two array arguments of a kernel overlap), FMA contraction allowed.
+jit = _numba.fast
+inl = _numba.inline
+_u = _numba.uint  # unsigned inner-loop indices with run-time bounds: lets LLVM vectorize the loops
 
 _EN = np.ascontiguousarray(EVAL_N, dtype=np.float64)     # (17, 6)
 _EDN = np.ascontiguousarray(EVAL_DN, dtype=np.float64)   # (17, 2, 6)
@@ -1750,7 +1703,7 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
         _finish_tangent(e, Kz, Kiso, fr, Ti, fv, fz, dn, ninv, K1, T0, K, t0, t1)
 
 
-@numba.njit(cache=CACHE, parallel=True)
+@_numba.parallel
 def _batch(x_el, fr_el, e_ref, to_cart, weights, C, cblk,
            used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
            pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
@@ -1922,7 +1875,7 @@ def _chunk_strains(e0, e1, x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a
             _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, deps)
 
 
-@numba.njit(cache=CACHE, parallel=True)
+@_numba.parallel
 def _batch_strains(x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, n_chunks, out,
                    with_increment, dh, deps):
     m = x_el.shape[0]

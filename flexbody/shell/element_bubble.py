@@ -54,11 +54,11 @@ import numba
 import numpy as np
 from numba import prange
 
-from flexbody.kernel_cache import CACHE
+from flexbody import _numba
 from flexbody.lie import kernels as lk
 from flexbody.lie.so3 import SERIES, SERIES_SWITCH
 from flexbody.shell.bubble import BUBBLE_MAX_ITERATIONS, BUBBLE_TOL, bubble_step
-from flexbody.shell.element import _FLAGS, _element_arrays
+from flexbody.shell.element import _element_arrays
 from flexbody.shell.element_reference import EVAL_DNB, EVAL_NB
 from flexbody.shell.geometry import EVAL_DN, EVAL_N, N_GAUSS
 
@@ -66,10 +66,11 @@ NDOF = 36
 NAUG = NDOF + 2
 N_EVAL = EVAL_N.shape[0]
 
-jit = numba.njit(cache=CACHE)
-# The per-element kernels (they allocate nothing): the flags of the MITC6 kernel (flexbody.shell.element: no
-# reference counting, noalias array arguments, numpy error model, FMA contraction).
-fast = numba.njit(**_FLAGS)
+# The jit policy of flexbody._numba: the per-element kernels allocate nothing (``fast``: no reference counting,
+# noalias array arguments, numpy error model, FMA contraction, as the MITC6 kernel); the workspace allocation
+# and the chunk loop use numba's defaults.
+jit = _numba.plain
+fast = _numba.fast
 _bubble_step = jit(bubble_step)       # the safeguarded Newton step, shared with the numpy reference
 
 _EN = np.ascontiguousarray(EVAL_N, dtype=np.float64)       # (17, 6)
@@ -955,7 +956,7 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, a_ptr, a_i, a_p, a_j
             f[e, c] = fa[c]
 
 
-@numba.njit(cache=CACHE, parallel=True)
+@_numba.parallel
 def _batch(x_el, fr_el, e_ref, to_cart, weights, C, a_ptr, a_i, a_p, a_j, a_v, used,
            EN, EDN, ENB, EDNB, b0, want_tangent, c_sym, tol, max_iter, n_chunks, f, K, b_out):
     m = x_el.shape[0]
