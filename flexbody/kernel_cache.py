@@ -27,8 +27,8 @@ and, if numba is already imported, to ``numba.core.config.CACHE_DIR``. With no w
 kernels run uncached (compiled in every process) instead of failing. ``CACHE_DIR`` holds the chosen directory
 (None: uncached), ``KERNEL_DIR`` the digest's directory in it, ``CACHE`` the ``cache=`` flag for ``numba.njit``.
 
-Importing this module is the only place flexbody sets process-wide numba state; ``flexbody/__init__.py``
-imports it first. A user's own ``cache=True`` functions decorated after ``import flexbody`` are cached there
+Importing this module and :mod:`flexbody._numba` (which adds a jit option to numba, see there) are the only
+places flexbody sets process-wide numba state; ``flexbody/__init__.py`` imports this module first. A user's own ``cache=True`` functions decorated after ``import flexbody`` are cached there
 too (numba has one cache location per process).
 """
 
