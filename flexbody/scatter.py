@@ -11,11 +11,10 @@ One pass per block, no temporaries: this replaces two dense einsum transforms an
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from flexbody import _numba
 from flexbody.kernel_arrays import kernel_input, kernel_output
-from flexbody.kernel_cache import CACHE
 
 
 def scatter_blocks(K: np.ndarray, S: np.ndarray, C: np.ndarray, slots: np.ndarray, scale: float,
@@ -40,7 +39,7 @@ def scatter_blocks(K: np.ndarray, S: np.ndarray, C: np.ndarray, slots: np.ndarra
     _scatter_blocks(K, S, C, slots, float(scale), kernel_output(out, (None,), "out"))
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@_numba.released
 def _scatter_blocks(K: np.ndarray, S: np.ndarray, C: np.ndarray, slots: np.ndarray, scale: float,
                     out: np.ndarray) -> None:
     m, nk, n_out = K.shape[0], S.shape[1], out.shape[0]

@@ -7,11 +7,14 @@ seconds) under a controlled environment, and checks where its index file (``*.nb
 from __future__ import annotations
 
 import os
+import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import flexbody
+from flexbody import kernel_cache
 
 PACKAGE = Path(flexbody.__file__).resolve().parent
 ROOT = PACKAGE.parent
@@ -48,7 +51,8 @@ def _run(tmp_path: Path, code: str, **env: str | None) -> str:
 
 
 def _index_files(directory: Path) -> list[Path]:
-    return list(directory.rglob("scatter.*scatter_blocks-*.nbi"))
+    """The kernel's index files in the sources' digest directory of ``directory`` (kernel_cache.KERNEL_DIR)."""
+    return list((directory / kernel_cache.KERNEL_SUBDIR).rglob("scatter.*scatter_blocks-*.nbi"))
 
 
 def test_cache_goes_to_the_user_cache_directory(tmp_path):
@@ -105,3 +109,44 @@ def test_a_temporary_directory_of_someone_else_is_not_used(tmp_path):
     assert not kernel_cache.usable(shared, private=True)
     assert kernel_cache.usable(shared, private=False)
     assert kernel_cache.choose([(shared, True), (tmp_path / "mine", True)]) == tmp_path / "mine"
+
+
+# ------------------------------------------------------------------------------------------------------------
+# Stale caches: the digest of the kernels' sources names the directory numba uses
+# ------------------------------------------------------------------------------------------------------------
+
+_USES_JIT = re.compile(r"numba\.njit|\bnjit\(|numba\.jit\(|numba\.extending|from flexbody import _numba")
+
+
+def test_every_module_that_compiles_kernels_is_in_the_digest():
+    sources = set(kernel_cache.kernel_sources())
+    users = {p for p in PACKAGE.rglob("*.py") if "__pycache__" not in p.parts and _USES_JIT.search(p.read_text())}
+    assert users, "the scan finds no kernel module"
+    assert users <= sources, f"kernel modules outside kernel_cache.KERNEL_MODULES: {sorted(users - sources)}"
+    # constants the kernels freeze come from modules that define no kernel
+    for name in ("lie/so3.py", "shell/geometry.py", "shell/mitc6.py", "shell/bubble.py"):
+        assert PACKAGE / name in sources
+
+
+def test_an_edit_of_any_kernel_source_changes_the_digest_and_nothing_else_does(tmp_path):
+    copy = tmp_path / "flexbody"
+    shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    digest = kernel_cache.sources_digest(copy)
+    assert digest == kernel_cache.sources_digest() and kernel_cache.KERNEL_SUBDIR == f"kernels-{digest}"
+    for name in ("lie/so3.py", "shell/geometry.py", "shell/element.py", "_numba.py"):
+        original = (copy / name).read_bytes()
+        (copy / name).write_bytes(original.replace(b"\n", b"\n\n", 1))
+        assert kernel_cache.sources_digest(copy) != digest, name
+        (copy / name).write_bytes(original)
+    for name in ("cli.py", "body.py", "outputs/__init__.py"):
+        (copy / name).write_text((copy / name).read_text() + "\n# an edit\n")
+    assert kernel_cache.sources_digest(copy) == digest
+
+
+def test_numba_and_child_processes_use_the_digest_directory():
+    import numba.core.config
+    assert kernel_cache.KERNEL_DIR == kernel_cache.CACHE_DIR / kernel_cache.KERNEL_SUBDIR
+    assert numba.core.config.CACHE_DIR == os.environ["NUMBA_CACHE_DIR"] == str(kernel_cache.KERNEL_DIR)
+    # a child process inherits NUMBA_CACHE_DIR = KERNEL_DIR and takes it as it is (no nested digest directory)
+    inherited = kernel_cache.candidate_dirs({"NUMBA_CACHE_DIR": str(kernel_cache.KERNEL_DIR)})[0][0]
+    assert inherited == kernel_cache.CACHE_DIR

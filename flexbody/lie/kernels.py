@@ -11,27 +11,34 @@ These per-vector kernels are building blocks for ``@njit`` code and check nothin
 sit in the element kernels' inner loops); the batched :func:`update_frames_into`, the one called from
 Python, checks its arrays.
 
-The Taylor coefficients are taken from ``so3.SERIES`` and frozen into the compiled code; numba's cache
-keys on this file only, so clear the cache (``flexbody.kernel_cache.CACHE_DIR``) after changing the series in
-``so3.py``.
+The ``*_co_into`` maps take their coefficients (``coefficients``, or ``point_coefficients_into`` and
+``inverse_coefficients``, which evaluate the series fused) instead of computing them: the element kernels
+(:mod:`flexbody.shell.element`, :mod:`flexbody.shell.element_bubble`) compute them once per point and inline
+these maps; this module is the only numba code of the SO(3) coefficients and derivative formulas.
+
+The Taylor coefficients are taken from ``so3.SERIES`` and frozen into the compiled code; the cache directory
+is named for a digest of all kernel sources (:mod:`flexbody.kernel_cache`), so an edit of ``so3.py``
+recompiles them.
 """
 
 from __future__ import annotations
 
 import math
 
-import numba
-
+from flexbody import _numba
 from flexbody.kernel_arrays import kernel_input, kernel_output
-from flexbody.kernel_cache import CACHE
 from flexbody.lie.so3 import SERIES, SERIES_SWITCH
 
 _SWITCH = SERIES_SWITCH
 _A1, _A2, _A3, _A4 = SERIES["a1"], SERIES["a2"], SERIES["a3"], SERIES["a4"]
 _C2, _C3, _C4 = SERIES["c2"], SERIES["c3"], SERIES["c4"]
 _E2, _E3 = SERIES["e2"], SERIES["e3"]
+_NSER = len(_A1)   # a1, a2, a3, c2, c3, e2, e3: one length (fused Horner loop)
+_NINV = len(_A4)   # a4, c4: one length
+assert all(len(SERIES[k]) == _NSER for k in ("a2", "a3", "c2", "c3", "e2", "e3")) and len(_C4) == _NINV
 
-jit = numba.njit(cache=CACHE, fastmath=False)
+jit = _numba.plain  # numba's defaults (flexbody._numba)
+inline = _numba.inline  # inlined into the callers (numba IR), which compile it with their own flags
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -112,6 +119,57 @@ def coefficients(p):
     return a1, a2, a3, a4, c2, c3, c4, e2, e3
 
 
+@inline
+def point_coefficients_into(p, co):
+    """co[:9] = :func:`coefficients` at ``p``, except a4 and c4 (co[3], co[6]), which are 0 below the series
+    switch (the maps of an evaluation point need only the other seven; their series are evaluated fused)."""
+    if p < _SWITCH:
+        x = p * p
+        a1 = 0.0
+        a2 = 0.0
+        a3 = 0.0
+        c2 = 0.0
+        c3 = 0.0
+        e2 = 0.0
+        e3 = 0.0
+        for j in range(_NSER - 1, -1, -1):
+            a1 = a1 * x + _A1[j]
+            a2 = a2 * x + _A2[j]
+            a3 = a3 * x + _A3[j]
+            c2 = c2 * x + _C2[j]
+            c3 = c3 * x + _C3[j]
+            e2 = e2 * x + _E2[j]
+            e3 = e3 * x + _E3[j]
+        co[0] = a1
+        co[1] = a2
+        co[2] = a3
+        co[3] = 0.0
+        co[4] = c2
+        co[5] = c3
+        co[6] = 0.0
+        co[7] = e2
+        co[8] = e3
+    else:
+        cf = coefficients(p)
+        for j in range(9):
+            co[j] = cf[j]
+
+
+@inline
+def inverse_coefficients(p):
+    """``(a4, c4)`` at ``p``: the coefficients of T^-1 and of its derivative (series fused below the switch)."""
+    if p < _SWITCH:
+        x = p * p
+        a4 = 0.0
+        c4 = 0.0
+        for j in range(_NINV - 1, -1, -1):
+            a4 = a4 * x + _A4[j]
+            c4 = c4 * x + _C4[j]
+        return a4, c4
+    cf = coefficients(p)
+    return cf[3], cf[6]
+
+
 # ----------------------------------------------------------------------------------------------------------
 # SO(3)
 # ----------------------------------------------------------------------------------------------------------
@@ -124,16 +182,218 @@ def hat_into(v, out):
     _add_hat(v, 1.0, out)
 
 
-@jit
-def _rodrigues(phi):
-    """Entries (row major) of exp(phi) = cos p I + a1 W + a2 phi phi^T."""
-    p = _norm(phi)
-    a1, a2 = coefficients(p)[:2]
-    d = 1.0 - a2 * p * p  # cos p, consistent with the coefficients
-    x, y, z = phi[0], phi[1], phi[2]
+# The maps with their coefficients passed in (``co`` = :func:`coefficients` of |phi|, or
+# :func:`point_coefficients_into`; the same for -phi): the element kernels compute the coefficients of a point
+# once and inline these (``phi``, ``a``, ``b`` may be arrays or tuples). They are the only place of the formulas
+# in numba code; the maps below compute the coefficients and call them.
+
+
+@inline
+def rodrigues_co(phi, co):
+    """Entries (row major) of exp(phi) = cos p I + a1 W + a2 phi phi^T, cos p = 1 - a2 p^2."""
+    a1 = co[0]
+    a2 = co[1]
+    x = phi[0]
+    y = phi[1]
+    z = phi[2]
+    d = 1.0 - a2 * (x * x + y * y + z * z)
     return (d + a2 * x * x, -a1 * z + a2 * x * y, a1 * y + a2 * x * z,
             a1 * z + a2 * y * x, d + a2 * y * y, -a1 * x + a2 * y * z,
             -a1 * y + a2 * z * x, a1 * x + a2 * z * y, d + a2 * z * z)
+
+
+@inline
+def exp_co_into(phi, co, out):
+    """out = exp(phi) (3x3)."""
+    E = rodrigues_co(phi, co)
+    out[0, 0] = E[0]
+    out[0, 1] = E[1]
+    out[0, 2] = E[2]
+    out[1, 0] = E[3]
+    out[1, 1] = E[4]
+    out[1, 2] = E[5]
+    out[2, 0] = E[6]
+    out[2, 1] = E[7]
+    out[2, 2] = E[8]
+
+
+@inline
+def tangent_co_into(phi, co, out):
+    """out = T(phi) = (1 - a3 p^2) I - a2 W + a3 phi phi^T."""
+    a2 = co[1]
+    a3 = co[2]
+    x = phi[0]
+    y = phi[1]
+    z = phi[2]
+    d = 1.0 - a3 * (x * x + y * y + z * z)
+    out[0, 0] = d + a3 * x * x
+    out[0, 1] = a2 * z + a3 * x * y
+    out[0, 2] = -a2 * y + a3 * x * z
+    out[1, 0] = -a2 * z + a3 * y * x
+    out[1, 1] = d + a3 * y * y
+    out[1, 2] = a2 * x + a3 * y * z
+    out[2, 0] = a2 * y + a3 * z * x
+    out[2, 1] = -a2 * x + a3 * z * y
+    out[2, 2] = d + a3 * z * z
+
+
+@inline
+def tangent_inv_co_into(phi, a4, out):
+    """out = T^-1(phi) = (1 - a4 p^2) I + W / 2 + a4 phi phi^T."""
+    x = phi[0]
+    y = phi[1]
+    z = phi[2]
+    d = 1.0 - a4 * (x * x + y * y + z * z)
+    out[0, 0] = d + a4 * x * x
+    out[0, 1] = -0.5 * z + a4 * x * y
+    out[0, 2] = 0.5 * y + a4 * x * z
+    out[1, 0] = 0.5 * z + a4 * y * x
+    out[1, 1] = d + a4 * y * y
+    out[1, 2] = -0.5 * x + a4 * y * z
+    out[2, 0] = -0.5 * y + a4 * z * x
+    out[2, 1] = 0.5 * x + a4 * z * y
+    out[2, 2] = d + a4 * z * z
+
+
+@inline
+def d_tangent_co_into(phi, b, co, out):
+    """out = X with (D T(phi)[v]) b = X v.
+
+    X = a2 hat(b) - a3 hat(r) - a3 (b phi^T - (phi.b) I) + (c3 q - c2 r) phi^T,  r = W b, q = W r.
+    """
+    a2 = co[1]
+    a3 = co[2]
+    c2 = co[4]
+    c3 = co[5]
+    p0 = phi[0]
+    p1 = phi[1]
+    p2 = phi[2]
+    b0 = b[0]
+    b1 = b[1]
+    b2 = b[2]
+    r0 = p1 * b2 - p2 * b1
+    r1 = p2 * b0 - p0 * b2
+    r2 = p0 * b1 - p1 * b0
+    q0 = p1 * r2 - p2 * r1
+    q1 = p2 * r0 - p0 * r2
+    q2 = p0 * r1 - p1 * r0
+    # X = a3 (phi.b) I + hat(a2 b - a3 r) + (c3 q - c2 r - a3 b) phi^T
+    h0 = a2 * b0 - a3 * r0
+    h1 = a2 * b1 - a3 * r1
+    h2 = a2 * b2 - a3 * r2
+    w0 = c3 * q0 - c2 * r0 - a3 * b0
+    w1 = c3 * q1 - c2 * r1 - a3 * b1
+    w2 = c3 * q2 - c2 * r2 - a3 * b2
+    dg = a3 * (p0 * b0 + p1 * b1 + p2 * b2)
+    out[0, 0] = dg + w0 * p0
+    out[0, 1] = -h2 + w0 * p1
+    out[0, 2] = h1 + w0 * p2
+    out[1, 0] = h2 + w1 * p0
+    out[1, 1] = dg + w1 * p1
+    out[1, 2] = -h0 + w1 * p2
+    out[2, 0] = -h1 + w2 * p0
+    out[2, 1] = h0 + w2 * p1
+    out[2, 2] = dg + w2 * p2
+
+
+@inline
+def d_tangent_inv_co_into(phi, b, a4, c4, out):
+    """out = X with (D T^-1(phi)[v]) b = X v.
+
+    X = -hat(b)/2 - a4 hat(r) - a4 (b phi^T - (phi.b) I) + c4 q phi^T,  r = W b, q = W r.
+    """
+    p0 = phi[0]
+    p1 = phi[1]
+    p2 = phi[2]
+    b0 = b[0]
+    b1 = b[1]
+    b2 = b[2]
+    r0 = p1 * b2 - p2 * b1
+    r1 = p2 * b0 - p0 * b2
+    r2 = p0 * b1 - p1 * b0
+    q0 = p1 * r2 - p2 * r1
+    q1 = p2 * r0 - p0 * r2
+    q2 = p0 * r1 - p1 * r0
+    # X = a4 (phi.b) I + hat(-b/2 - a4 r) + (c4 q - a4 b) phi^T
+    h0 = -0.5 * b0 - a4 * r0
+    h1 = -0.5 * b1 - a4 * r1
+    h2 = -0.5 * b2 - a4 * r2
+    w0 = c4 * q0 - a4 * b0
+    w1 = c4 * q1 - a4 * b1
+    w2 = c4 * q2 - a4 * b2
+    dg = a4 * (p0 * b0 + p1 * b1 + p2 * b2)
+    out[0, 0] = dg + w0 * p0
+    out[0, 1] = -h2 + w0 * p1
+    out[0, 2] = h1 + w0 * p2
+    out[1, 0] = h2 + w1 * p0
+    out[1, 1] = dg + w1 * p1
+    out[1, 2] = -h0 + w1 * p2
+    out[2, 0] = -h1 + w2 * p0
+    out[2, 1] = h0 + w2 * p1
+    out[2, 2] = dg + w2 * p2
+
+
+@inline
+def d2_tangent_co_into(phi, a, b, co, out):
+    """out = Y (symmetric) with a^T (D^2 T(phi)[v, w]) b = v^T Y w.
+
+    Y = c2 (m phi^T + phi m^T) - c3 (u phi^T + phi u^T) + a3 (a b^T + b a^T) + (e3 a.q - e2 a.r) phi phi^T
+        + (c3 a.q - c2 a.r - 2 a3 a.b) I,   r = W b, q = W r, m = a x b, u = a x r + b x (W a).
+    """
+    a3 = co[2]
+    c2 = co[4]
+    c3 = co[5]
+    e2 = co[7]
+    e3 = co[8]
+    p0 = phi[0]
+    p1 = phi[1]
+    p2 = phi[2]
+    a0 = a[0]
+    a1 = a[1]
+    a2_ = a[2]
+    b0 = b[0]
+    b1 = b[1]
+    b2 = b[2]
+    r0 = p1 * b2 - p2 * b1
+    r1 = p2 * b0 - p0 * b2
+    r2 = p0 * b1 - p1 * b0
+    q0 = p1 * r2 - p2 * r1
+    q1 = p2 * r0 - p0 * r2
+    q2 = p0 * r1 - p1 * r0
+    m0 = a1 * b2 - a2_ * b1
+    m1 = a2_ * b0 - a0 * b2
+    m2 = a0 * b1 - a1 * b0
+    # u = a x r + b x (phi x a)
+    pa0 = p1 * a2_ - p2 * a1
+    pa1 = p2 * a0 - p0 * a2_
+    pa2 = p0 * a1 - p1 * a0
+    u0 = (a1 * r2 - a2_ * r1) + (b1 * pa2 - b2 * pa1)
+    u1 = (a2_ * r0 - a0 * r2) + (b2 * pa0 - b0 * pa2)
+    u2 = (a0 * r1 - a1 * r0) + (b0 * pa1 - b1 * pa0)
+    ar = a0 * r0 + a1 * r1 + a2_ * r2
+    aq = a0 * q0 + a1 * q1 + a2_ * q2
+    ab = a0 * b0 + a1 * b1 + a2_ * b2
+    dg = c3 * aq - c2 * ar - 2.0 * a3 * ab
+    sc = e3 * aq - e2 * ar
+    # row i: c2 (m_i phi_j + phi_i m_j) - c3 (u_i phi_j + phi_i u_j) + a3 (a_i b_j + b_i a_j) + sc phi_i phi_j
+    out[0, 0] = dg + 2.0 * (c2 * m0 * p0 - c3 * u0 * p0 + a3 * a0 * b0) + sc * p0 * p0
+    out[1, 1] = dg + 2.0 * (c2 * m1 * p1 - c3 * u1 * p1 + a3 * a1 * b1) + sc * p1 * p1
+    out[2, 2] = dg + 2.0 * (c2 * m2 * p2 - c3 * u2 * p2 + a3 * a2_ * b2) + sc * p2 * p2
+    y01 = c2 * (m0 * p1 + p0 * m1) - c3 * (u0 * p1 + p0 * u1) + a3 * (a0 * b1 + b0 * a1) + sc * p0 * p1
+    y02 = c2 * (m0 * p2 + p0 * m2) - c3 * (u0 * p2 + p0 * u2) + a3 * (a0 * b2 + b0 * a2_) + sc * p0 * p2
+    y12 = c2 * (m1 * p2 + p1 * m2) - c3 * (u1 * p2 + p1 * u2) + a3 * (a1 * b2 + b1 * a2_) + sc * p1 * p2
+    out[0, 1] = y01
+    out[1, 0] = y01
+    out[0, 2] = y02
+    out[2, 0] = y02
+    out[1, 2] = y12
+    out[2, 1] = y12
+
+
+@jit
+def _rodrigues(phi):
+    """Entries (row major) of exp(phi)."""
+    return rodrigues_co(phi, coefficients(_norm(phi)))
 
 
 @jit
@@ -177,85 +437,32 @@ def log_into(R, out):
 @jit
 def tangent_into(phi, out):
     """out = T(phi) = (1 - a3 p^2) I - a2 W + a3 phi phi^T."""
-    p = _norm(phi)
-    a2, a3 = coefficients(p)[1:3]
-    _set_identity(1.0 - a3 * p * p, out)
-    _add_hat(phi, -a2, out)
-    for i in range(3):
-        for j in range(3):
-            out[i, j] += a3 * phi[i] * phi[j]
+    tangent_co_into(phi, coefficients(_norm(phi)), out)
 
 
 @jit
 def tangent_inv_into(phi, out):
     """out = T^-1(phi) = (1 - a4 p^2) I + W / 2 + a4 phi phi^T."""
-    p = _norm(phi)
-    a4 = coefficients(p)[3]
-    _set_identity(1.0 - a4 * p * p, out)
-    _add_hat(phi, 0.5, out)
-    for i in range(3):
-        for j in range(3):
-            out[i, j] += a4 * phi[i] * phi[j]
+    tangent_inv_co_into(phi, coefficients(_norm(phi))[3], out)
 
 
 @jit
 def d_tangent_into(phi, b, out):
-    """out = X with (D T(phi)[v]) b = X v.
-
-    X = a2 hat(b) - a3 hat(r) - a3 (b phi^T - (phi.b) I) + (c3 q - c2 r) phi^T,  r = W b, q = W r.
-    """
-    p = _norm(phi)
-    _, a2, a3, _, c2, c3, _, _, _ = coefficients(p)
-    r = _cross(phi, b)
-    q = _cross(phi, r)
-    _set_identity(a3 * _dot(phi, b), out)
-    _add_hat(b, a2, out)
-    _add_hat(r, -a3, out)
-    for i in range(3):
-        for j in range(3):
-            out[i, j] += (c3 * q[i] - c2 * r[i] - a3 * b[i]) * phi[j]
+    """out = X with (D T(phi)[v]) b = X v (:func:`d_tangent_co_into`)."""
+    d_tangent_co_into(phi, b, coefficients(_norm(phi)), out)
 
 
 @jit
 def d_tangent_inv_into(phi, b, out):
-    """out = X with (D T^-1(phi)[v]) b = X v.
-
-    X = -hat(b)/2 - a4 hat(r) - a4 (b phi^T - (phi.b) I) + c4 q phi^T,  r = W b, q = W r.
-    """
-    p = _norm(phi)
-    _, _, _, a4, _, _, c4, _, _ = coefficients(p)
-    r = _cross(phi, b)
-    q = _cross(phi, r)
-    _set_identity(a4 * _dot(phi, b), out)
-    _add_hat(b, -0.5, out)
-    _add_hat(r, -a4, out)
-    for i in range(3):
-        for j in range(3):
-            out[i, j] += (c4 * q[i] - a4 * b[i]) * phi[j]
+    """out = X with (D T^-1(phi)[v]) b = X v (:func:`d_tangent_inv_co_into`)."""
+    cf = coefficients(_norm(phi))
+    d_tangent_inv_co_into(phi, b, cf[3], cf[6], out)
 
 
 @jit
 def d2_tangent_into(phi, a, b, out):
-    """out = Y (symmetric) with a^T (D^2 T(phi)[v, w]) b = v^T Y w.
-
-    Y = c2 (m phi^T + phi m^T) - c3 (u phi^T + phi u^T) + a3 (a b^T + b a^T) + (e3 a.q - e2 a.r) phi phi^T
-        + (c3 a.q - c2 a.r - 2 a3 a.b) I,   r = W b, q = W r, m = a x b, u = a x r + b x (W a).
-    """
-    p = _norm(phi)
-    _, _, a3, _, c2, c3, _, e2, e3 = coefficients(p)
-    r = _cross(phi, b)
-    q = _cross(phi, r)
-    m = _cross(a, b)
-    ur = _cross(a, r)
-    ua = _cross(b, _cross(phi, a))
-    u = (ur[0] + ua[0], ur[1] + ua[1], ur[2] + ua[2])
-    ar, aq = _dot(a, r), _dot(a, q)
-    _set_identity(c3 * aq - c2 * ar - 2.0 * a3 * _dot(a, b), out)
-    s = e3 * aq - e2 * ar
-    for i in range(3):
-        for j in range(3):
-            out[i, j] += (c2 * (m[i] * phi[j] + phi[i] * m[j]) - c3 * (u[i] * phi[j] + phi[i] * u[j])
-                          + a3 * (a[i] * b[j] + b[i] * a[j]) + s * phi[i] * phi[j])
+    """out = Y (symmetric) with a^T (D^2 T(phi)[v, w]) b = v^T Y w (:func:`d2_tangent_co_into`)."""
+    d2_tangent_co_into(phi, a, b, coefficients(_norm(phi)), out)
 
 
 @jit

@@ -34,13 +34,14 @@ terms carry given Gauss-point stresses (``stress=`` of :func:`internal_force_tan
 weights Ps and the node terms are those of the given stresses, the force stays that of the strains), and the
 strains linearized along a nodal motion, B dh (:func:`linearized_strains_batch`, from the point kinematics).
 
-SO(3): ``flexbody.lie.kernels.log_into`` and ``kernels.coefficients`` (closed forms above the series switch);
-below the switch the coefficients are the same Taylor series ``so3.SERIES``, evaluated fused, once per point.
-The tangent-operator derivatives are the formulas of ``kernels.d_tangent_into`` / ``d_tangent_inv_into`` /
-``d2_tangent_into`` written with these precomputed coefficients (a point needs up to eight of them).
+SO(3): :mod:`flexbody.lie.kernels`, the only numba code of these formulas: ``log_into``, the coefficients
+of a point computed once (``point_coefficients_into``, ``inverse_coefficients``: closed forms above the series
+switch, the Taylor series ``so3.SERIES`` fused below), and the maps that take them (``exp_co_into``,
+``tangent_co_into``, ``tangent_inv_co_into``, ``d_tangent_co_into``, ``d_tangent_inv_co_into``,
+``d2_tangent_co_into``; a point needs up to eight), inlined.
 
 Performance notes: the small helpers are inlined at numba-IR level so that the per-point functions contain no
-calls; the kernels are compiled without reference counting and with noalias array arguments (see _FLAGS), so
+calls; the kernels are compiled without reference counting and with noalias array arguments (see flexbody._numba), so
 that point data are read through views of the per-point arrays at no cost; the element loop runs inside one
 function per parallel chunk, whose workspaces are allocated once per chunk (a few chunks per thread), and
 prefetches the next element's data. Nothing is allocated per element or point. The section stiffness must be
@@ -51,84 +52,29 @@ from __future__ import annotations
 
 import math
 
-import llvmlite.binding
 import numba
-import numba.core.cgutils
-import numba.core.compiler
-import numba.core.cpu
-import numba.core.options
-import numba.extending
 import numpy as np
 from numba import prange
 
+from flexbody import _numba
+from flexbody._numba import prefetch as _prefetch
 from flexbody.kernel_arrays import kernel_input as _as
-from flexbody.kernel_cache import CACHE
 from flexbody.lie import kernels as lk
-from flexbody.lie.so3 import SERIES, SERIES_SWITCH
 from flexbody.shell.geometry import EVAL_DN, EVAL_N, GAUSS_OFFSET, N_GAUSS
 from flexbody.shell.mitc6 import N_TYING
 
 N_EVAL = N_TYING + N_GAUSS
 NDOF = 36
 
-# The kernels below never allocate: they are compiled without reference counting where numba allows it
-# (``_nrt=False``; otherwise every array argument costs an atomic incref/decref per call). FMA contraction
-# is allowed (results agree with the numpy reference to round-off).
-_FLAGS = dict(cache=CACHE, error_model="numpy", fastmath={"contract"})
-if hasattr(numba.core.cpu.CPUTargetOptions, "_nrt"):
-    _FLAGS["_nrt"] = False
-# No two array arguments of a kernel overlap (workspaces are distinct arrays, inputs are only read): their data
-# pointers are declared ``noalias`` (numba's own compiler flag, set by its parfors lowering; not a jit option,
-# so it is mapped here). Without it LLVM must assume that every store may change every array: it reloads
-# values and guards the vector loops with run-time overlap checks (the kernel is 20 % slower).
-if hasattr(numba.core.compiler.Flags, "noalias") and hasattr(numba.core.options.TargetOptions, "Mapping"):
-    if not hasattr(numba.core.cpu.CPUTargetOptions, "_noalias"):
-        numba.core.cpu.CPUTargetOptions._noalias = numba.core.options.TargetOptions.Mapping("noalias")
-    _FLAGS["_noalias"] = True
-jit = numba.njit(**_FLAGS)
-inl = numba.njit(inline="always", **_FLAGS)
-_u = numba.uint64  # unsigned inner-loop indices with run-time bounds: lets LLVM vectorize the loops
-
-
-# llvm.prefetch is overloaded on the pointer type: "p0" with opaque pointers (LLVM >= 15), "p0i8" before
-_PREFETCH_NAME = "llvm.prefetch.p0" if llvmlite.binding.llvm_version_info >= (15,) else "llvm.prefetch.p0i8"
-
-
-@numba.extending.intrinsic
-def _prefetch(typingctx, arr, idx, write):
-    """Prefetch (into L2) the cache line of element idx of arr's data (flat index), to read or, write=True, to write.
-
-    A hint only (never faults, changes no result): the element loop prefetches the data of the elements ahead.
-    """
-    if not (isinstance(arr, numba.types.Array) and isinstance(idx, numba.types.Integer)
-            and isinstance(write, numba.types.BooleanLiteral)):
-        return None
-    rw = 1 if write.literal_value else 0
-
-    def codegen(context, builder, signature, args):
-        from llvmlite import ir
-        ary = context.make_array(signature.args[0])(context, builder, args[0])
-        i8p = ir.IntType(8).as_pointer()
-        i32 = ir.IntType(32)
-        size = context.get_abi_sizeof(context.get_data_type(signature.args[0].dtype))
-        ptr = builder.gep(builder.bitcast(ary.data, i8p), [builder.mul(args[1], ir.Constant(args[1].type, size))])
-        fnty = ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32])
-        fn = numba.core.cgutils.get_or_insert_function(builder.module, fnty, _PREFETCH_NAME)
-        builder.call(fn, [ptr, ir.Constant(i32, rw), ir.Constant(i32, 2), ir.Constant(i32, 1)])
-        return context.get_dummy_value()
-
-    return numba.types.void(arr, idx, write), codegen
+# The jit policy of flexbody._numba: the kernels below never allocate (no reference counting, noalias array
+# arguments: no two array arguments of a kernel overlap), FMA contraction allowed.
+jit = _numba.fast
+inl = _numba.inline
+_u = _numba.uint  # unsigned inner-loop indices with run-time bounds: lets LLVM vectorize the loops
 
 _EN = np.ascontiguousarray(EVAL_N, dtype=np.float64)     # (17, 6)
 _EDN = np.ascontiguousarray(EVAL_DN, dtype=np.float64)   # (17, 2, 6)
 
-_SWITCH = SERIES_SWITCH
-_SA1, _SA2, _SA3 = SERIES["a1"], SERIES["a2"], SERIES["a3"]
-_SC2, _SC3, _SE2, _SE3 = SERIES["c2"], SERIES["c3"], SERIES["e2"], SERIES["e3"]
-_SA4, _SC4 = SERIES["a4"], SERIES["c4"]
-_NENT = len(_SA1)
-_NCOT = len(_SA4)
-assert all(len(SERIES[k]) == _NENT for k in ("a1", "a2", "a3", "c2", "c3", "e2", "e3")) and len(_SC4) == _NCOT
 
 # slots of the point coordinates xi (3 components each)
 _U0, _U1, _V0, _V, _W0, _W1 = 0, 1, 2, 3, 4, 5
@@ -217,156 +163,19 @@ def _add_blk_both(core, s, t, M, alpha):
 
 
 # ----------------------------------------------------------------------------------------------------------
-# Tangent-operator derivatives (formulas of flexbody.lie.kernels, coefficients passed in)
-# co = (a1, a2, a3, a4, c2, c3, c4, e2, e3)
-# ----------------------------------------------------------------------------------------------------------
-
-
-@inl
-def _dtan_to(p0, p1, p2, b0, b1, b2, co, out):
-    """out = X with (D T(phi)[v]) b = X v (kernels.d_tangent_into)."""
-    a2 = co[1]
-    a3 = co[2]
-    c2 = co[4]
-    c3 = co[5]
-    r0 = p1 * b2 - p2 * b1
-    r1 = p2 * b0 - p0 * b2
-    r2 = p0 * b1 - p1 * b0
-    q0 = p1 * r2 - p2 * r1
-    q1 = p2 * r0 - p0 * r2
-    q2 = p0 * r1 - p1 * r0
-    # X = a3 (phi.b) I + hat(a2 b - a3 r) + (c3 q - c2 r - a3 b) phi^T
-    h0 = a2 * b0 - a3 * r0
-    h1 = a2 * b1 - a3 * r1
-    h2 = a2 * b2 - a3 * r2
-    w0 = c3 * q0 - c2 * r0 - a3 * b0
-    w1 = c3 * q1 - c2 * r1 - a3 * b1
-    w2 = c3 * q2 - c2 * r2 - a3 * b2
-    dg = a3 * (p0 * b0 + p1 * b1 + p2 * b2)
-    out[0, 0] = dg + w0 * p0
-    out[0, 1] = -h2 + w0 * p1
-    out[0, 2] = h1 + w0 * p2
-    out[1, 0] = h2 + w1 * p0
-    out[1, 1] = dg + w1 * p1
-    out[1, 2] = -h0 + w1 * p2
-    out[2, 0] = -h1 + w2 * p0
-    out[2, 1] = h0 + w2 * p1
-    out[2, 2] = dg + w2 * p2
-
-
-@inl
-def _dtan_inv_to(p0, p1, p2, b0, b1, b2, a4, c4, out):
-    """out = X with (D T^-1(phi)[v]) b = X v (kernels.d_tangent_inv_into)."""
-    r0 = p1 * b2 - p2 * b1
-    r1 = p2 * b0 - p0 * b2
-    r2 = p0 * b1 - p1 * b0
-    q0 = p1 * r2 - p2 * r1
-    q1 = p2 * r0 - p0 * r2
-    q2 = p0 * r1 - p1 * r0
-    # X = a4 (phi.b) I + hat(-b/2 - a4 r) + (c4 q - a4 b) phi^T
-    h0 = -0.5 * b0 - a4 * r0
-    h1 = -0.5 * b1 - a4 * r1
-    h2 = -0.5 * b2 - a4 * r2
-    w0 = c4 * q0 - a4 * b0
-    w1 = c4 * q1 - a4 * b1
-    w2 = c4 * q2 - a4 * b2
-    dg = a4 * (p0 * b0 + p1 * b1 + p2 * b2)
-    out[0, 0] = dg + w0 * p0
-    out[0, 1] = -h2 + w0 * p1
-    out[0, 2] = h1 + w0 * p2
-    out[1, 0] = h2 + w1 * p0
-    out[1, 1] = dg + w1 * p1
-    out[1, 2] = -h0 + w1 * p2
-    out[2, 0] = -h1 + w2 * p0
-    out[2, 1] = h0 + w2 * p1
-    out[2, 2] = dg + w2 * p2
-
-
-@inl
-def _d2tan_to(p0, p1, p2, a0, a1, a2_, b0, b1, b2, co, out):
-    """out = Y (symmetric), a^T (D^2 T(phi)[v, w]) b = v^T Y w (kernels.d2_tangent_into)."""
-    a3 = co[2]
-    c2 = co[4]
-    c3 = co[5]
-    e2 = co[7]
-    e3 = co[8]
-    r0 = p1 * b2 - p2 * b1
-    r1 = p2 * b0 - p0 * b2
-    r2 = p0 * b1 - p1 * b0
-    q0 = p1 * r2 - p2 * r1
-    q1 = p2 * r0 - p0 * r2
-    q2 = p0 * r1 - p1 * r0
-    m0 = a1 * b2 - a2_ * b1
-    m1 = a2_ * b0 - a0 * b2
-    m2 = a0 * b1 - a1 * b0
-    # u = a x r + b x (phi x a)
-    pa0 = p1 * a2_ - p2 * a1
-    pa1 = p2 * a0 - p0 * a2_
-    pa2 = p0 * a1 - p1 * a0
-    u0 = (a1 * r2 - a2_ * r1) + (b1 * pa2 - b2 * pa1)
-    u1 = (a2_ * r0 - a0 * r2) + (b2 * pa0 - b0 * pa2)
-    u2 = (a0 * r1 - a1 * r0) + (b0 * pa1 - b1 * pa0)
-    ar = a0 * r0 + a1 * r1 + a2_ * r2
-    aq = a0 * q0 + a1 * q1 + a2_ * q2
-    ab = a0 * b0 + a1 * b1 + a2_ * b2
-    dg = c3 * aq - c2 * ar - 2.0 * a3 * ab
-    sc = e3 * aq - e2 * ar
-    # row i: c2 (m_i phi_j + phi_i m_j) - c3 (u_i phi_j + phi_i u_j) + a3 (a_i b_j + b_i a_j) + sc phi_i phi_j
-    out[0, 0] = dg + 2.0 * (c2 * m0 * p0 - c3 * u0 * p0 + a3 * a0 * b0) + sc * p0 * p0
-    out[1, 1] = dg + 2.0 * (c2 * m1 * p1 - c3 * u1 * p1 + a3 * a1 * b1) + sc * p1 * p1
-    out[2, 2] = dg + 2.0 * (c2 * m2 * p2 - c3 * u2 * p2 + a3 * a2_ * b2) + sc * p2 * p2
-    y01 = c2 * (m0 * p1 + p0 * m1) - c3 * (u0 * p1 + p0 * u1) + a3 * (a0 * b1 + b0 * a1) + sc * p0 * p1
-    y02 = c2 * (m0 * p2 + p0 * m2) - c3 * (u0 * p2 + p0 * u2) + a3 * (a0 * b2 + b0 * a2_) + sc * p0 * p2
-    y12 = c2 * (m1 * p2 + p1 * m2) - c3 * (u1 * p2 + p1 * u2) + a3 * (a1 * b2 + b1 * a2_) + sc * p1 * p2
-    out[0, 1] = y01
-    out[1, 0] = y01
-    out[0, 2] = y02
-    out[2, 0] = y02
-    out[1, 2] = y12
-    out[2, 1] = y12
-
-
-# ----------------------------------------------------------------------------------------------------------
-# Coefficients: kernels.coefficients above the switch, the same series (fused Horner) below
+# SO(3) at the points and nodes: the coefficients once per point (flexbody.lie.kernels.point_coefficients_into:
+# lk.coefficients above the series switch, the same series fused below), then the maps of flexbody.lie.kernels
+# that take them (inlined)
 # ----------------------------------------------------------------------------------------------------------
 
 
 @jit
 def _point_coefficients(used, Pd, Pco):
-    """Pco[p] = (a1, a2, a3, a4, c2, c3, c4, e2, e3) at |d_p| for the used points (a4, c4 unused: 0)."""
+    """Pco[p] = (a1, a2, a3, a4, c2, c3, c4, e2, e3) at |d_p| for the used points (a4, c4 unused)."""
     for k in range(used.shape[0]):
         p = used[k]
         n = math.sqrt(Pd[p, 0] * Pd[p, 0] + Pd[p, 1] * Pd[p, 1] + Pd[p, 2] * Pd[p, 2])
-        if n < _SWITCH:
-            x = n * n
-            a1 = 0.0
-            a2 = 0.0
-            a3 = 0.0
-            c2 = 0.0
-            c3 = 0.0
-            e2 = 0.0
-            e3 = 0.0
-            for j in range(_NENT - 1, -1, -1):
-                a1 = a1 * x + _SA1[j]
-                a2 = a2 * x + _SA2[j]
-                a3 = a3 * x + _SA3[j]
-                c2 = c2 * x + _SC2[j]
-                c3 = c3 * x + _SC3[j]
-                e2 = e2 * x + _SE2[j]
-                e3 = e3 * x + _SE3[j]
-            Pco[p, 0] = a1
-            Pco[p, 1] = a2
-            Pco[p, 2] = a3
-            Pco[p, 3] = 0.0
-            Pco[p, 4] = c2
-            Pco[p, 5] = c3
-            Pco[p, 6] = 0.0
-            Pco[p, 7] = e2
-            Pco[p, 8] = e3
-        else:
-            cf = lk.coefficients(n)
-            for j in range(9):
-                Pco[p, j] = cf[j]
+        lk.point_coefficients_into(n, Pco[p])
 
 
 @jit
@@ -387,31 +196,10 @@ def _node_setup(fr, dn, Ti, ninv, M):
         d1 = dn[i, 1]
         d2 = dn[i, 2]
         pp = d0 * d0 + d1 * d1 + d2 * d2
-        n = math.sqrt(pp)
-        if n < _SWITCH:
-            x = pp
-            a4 = 0.0
-            c4 = 0.0
-            for j in range(_NCOT - 1, -1, -1):
-                a4 = a4 * x + _SA4[j]
-                c4 = c4 * x + _SC4[j]
-        else:
-            cf = lk.coefficients(n)
-            a4 = cf[3]
-            c4 = cf[6]
+        a4, c4 = lk.inverse_coefficients(math.sqrt(pp))
         ninv[i, 0] = a4
         ninv[i, 1] = c4
-        # T^-1 = (1 - a4 p^2) I + hat(d)/2 + a4 d d^T
-        dg = 1.0 - a4 * pp
-        Ti[i, 0, 0] = dg + a4 * d0 * d0
-        Ti[i, 1, 1] = dg + a4 * d1 * d1
-        Ti[i, 2, 2] = dg + a4 * d2 * d2
-        Ti[i, 0, 1] = a4 * d0 * d1 - 0.5 * d2
-        Ti[i, 1, 0] = a4 * d0 * d1 + 0.5 * d2
-        Ti[i, 0, 2] = a4 * d0 * d2 + 0.5 * d1
-        Ti[i, 2, 0] = a4 * d0 * d2 - 0.5 * d1
-        Ti[i, 1, 2] = a4 * d1 * d2 - 0.5 * d0
-        Ti[i, 2, 1] = a4 * d1 * d2 + 0.5 * d0
+        lk.tangent_inv_co_into((d0, d1, d2), a4, Ti[i])
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -481,34 +269,12 @@ def _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, with_x):
         d0 = Pd[p, 0]
         d1 = Pd[p, 1]
         d2 = Pd[p, 2]
-        pp = d0 * d0 + d1 * d1 + d2 * d2
-        a1 = Pco[p, 0]
-        a2 = Pco[p, 1]
-        a3 = Pco[p, 2]
+        co = Pco[p]
         Q = PQ[p]
         T = PT[p]
         R = PR[p]
-        # Q = cos I + a1 hat(d) + a2 d d^T (cos = 1 - a2 p^2);  T = (1 - a3 p^2) I - a2 hat(d) + a3 d d^T
-        cq = 1.0 - a2 * pp
-        ct = 1.0 - a3 * pp
-        for r in range(3):
-            for c in range(3):
-                Q[r, c] = a2 * Pd[p, r] * Pd[p, c]
-                T[r, c] = a3 * Pd[p, r] * Pd[p, c]
-            Q[r, r] += cq
-            T[r, r] += ct
-        Q[0, 1] -= a1 * d2
-        Q[0, 2] += a1 * d1
-        Q[1, 0] += a1 * d2
-        Q[1, 2] -= a1 * d0
-        Q[2, 0] -= a1 * d1
-        Q[2, 1] += a1 * d0
-        T[0, 1] += a2 * d2
-        T[0, 2] -= a2 * d1
-        T[1, 0] -= a2 * d2
-        T[1, 2] += a2 * d0
-        T[2, 0] += a2 * d1
-        T[2, 1] -= a2 * d0
+        lk.exp_co_into((d0, d1, d2), co, Q)
+        lk.tangent_co_into((d0, d1, d2), co, T)
         for r in range(3):
             for c in range(3):
                 R[r, c] = fr[0, r, 0] * Q[0, c] + fr[0, r, 1] * Q[1, c] + fr[0, r, 2] * Q[2, c]
@@ -526,9 +292,8 @@ def _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, with_x):
                 PF[p, a, c] = R[0, c] * xa0 + R[1, c] * xa1 + R[2, c] * xa2
                 PF[p, 2 + a, c] = T[c, 0] * Pda[p, a, 0] + T[c, 1] * Pda[p, a, 1] + T[c, 2] * Pda[p, a, 2]
         if with_x:
-            co = Pco[p]
-            _dtan_to(d0, d1, d2, Pda[p, 0, 0], Pda[p, 0, 1], Pda[p, 0, 2], co, PX[p, 0])
-            _dtan_to(d0, d1, d2, Pda[p, 1, 0], Pda[p, 1, 1], Pda[p, 1, 2], co, PX[p, 1])
+            lk.d_tangent_co_into((d0, d1, d2), (Pda[p, 0, 0], Pda[p, 0, 1], Pda[p, 0, 2]), co, PX[p, 0])
+            lk.d_tangent_co_into((d0, d1, d2), (Pda[p, 1, 0], Pda[p, 1, 1], Pda[p, 1, 2]), co, PX[p, 1])
 
 
 @jit
@@ -878,7 +643,7 @@ def _geometric_core(s, g, F, Q, T, R, X0, X1, d, da, co, core, ns, with_uu, t0, 
     _mm(t1, T, t2)
     _add_blk(core, _V0, _V, t2, 1.0)
     # [V, V] -= D T(-d)[.] c
-    _dtan_to(-d[0], -d[1], -d[2], cc0, cc1, cc2, co, t2)
+    lk.d_tangent_co_into((-d[0], -d[1], -d[2]), (cc0, cc1, cc2), co, t2)
     _add_blk(core, _V, _V, t2, -1.0)
     if ns < 6:
         return
@@ -933,9 +698,9 @@ def _geometric_core(s, g, F, Q, T, R, X0, X1, d, da, co, core, ns, with_uu, t0, 
     # second variation: D^2 T(d)[., .] contracted with b_a, d_,a ; Z_a = -D T(-d)[.] b_a at (V, W_a)
     for a in range(2):
         o = 6 + 3 * a
-        _d2tan_to(d[0], d[1], d[2], g[o], g[o + 1], g[o + 2], da[a, 0], da[a, 1], da[a, 2], co, t2)
+        lk.d2_tangent_co_into((d[0], d[1], d[2]), (g[o], g[o + 1], g[o + 2]), (da[a, 0], da[a, 1], da[a, 2]), co, t2)
         _add_blk(core, _V, _V, t2, 1.0)
-        _dtan_to(-d[0], -d[1], -d[2], g[o], g[o + 1], g[o + 2], co, t2)
+        lk.d_tangent_co_into((-d[0], -d[1], -d[2]), (g[o], g[o + 1], g[o + 2]), co, t2)
         _add_blk_both(core, _W0 + a, _V, t2, -1.0)
 
 
@@ -1667,7 +1432,7 @@ def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, T0, K, Dp, Dm):
         e0 = fz[0, _ZR + i]
         e1 = fz[0, _ZR + 8 + i]
         e2 = fz[0, _ZR + 16 + i]
-        _dtan_inv_to(dn[i, 0], dn[i, 1], dn[i, 2], e0, e1, e2, ninv[i, 0], ninv[i, 1], Dp)
+        lk.d_tangent_inv_co_into((dn[i, 0], dn[i, 1], dn[i, 2]), (e0, e1, e2), ninv[i, 0], ninv[i, 1], Dp)
         # D T^-1(-d)[.] e = -hat(e) - D T^-1(d)[.] e
         for r in range(3):
             for c in range(3):
@@ -1750,7 +1515,7 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
         _finish_tangent(e, Kz, Kiso, fr, Ti, fv, fz, dn, ninv, K1, T0, K, t0, t1)
 
 
-@numba.njit(cache=CACHE, parallel=True)
+@_numba.parallel
 def _batch(x_el, fr_el, e_ref, to_cart, weights, C, cblk,
            used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
            pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
@@ -1922,7 +1687,7 @@ def _chunk_strains(e0, e1, x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a
             _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, deps)
 
 
-@numba.njit(cache=CACHE, parallel=True)
+@_numba.parallel
 def _batch_strains(x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, n_chunks, out,
                    with_increment, dh, deps):
     m = x_el.shape[0]

@@ -54,11 +54,10 @@ import numba
 import numpy as np
 from numba import prange
 
-from flexbody.kernel_cache import CACHE
+from flexbody import _numba
 from flexbody.lie import kernels as lk
-from flexbody.lie.so3 import SERIES, SERIES_SWITCH
 from flexbody.shell.bubble import BUBBLE_MAX_ITERATIONS, BUBBLE_TOL, bubble_step
-from flexbody.shell.element import _FLAGS, _element_arrays
+from flexbody.shell.element import _element_arrays
 from flexbody.shell.element_reference import EVAL_DNB, EVAL_NB
 from flexbody.shell.geometry import EVAL_DN, EVAL_N, N_GAUSS
 
@@ -66,10 +65,11 @@ NDOF = 36
 NAUG = NDOF + 2
 N_EVAL = EVAL_N.shape[0]
 
-jit = numba.njit(cache=CACHE)
-# The per-element kernels (they allocate nothing): the flags of the MITC6 kernel (flexbody.shell.element: no
-# reference counting, noalias array arguments, numpy error model, FMA contraction).
-fast = numba.njit(**_FLAGS)
+# The jit policy of flexbody._numba: the per-element kernels allocate nothing (``fast``: no reference counting,
+# noalias array arguments, numpy error model, FMA contraction, as the MITC6 kernel); the workspace allocation
+# and the chunk loop use numba's defaults.
+jit = _numba.plain
+fast = _numba.fast
 _bubble_step = jit(bubble_step)       # the safeguarded Newton step, shared with the numpy reference
 
 _EN = np.ascontiguousarray(EVAL_N, dtype=np.float64)       # (17, 6)
@@ -152,90 +152,8 @@ def _hessian_col(s, G, c, H):
     H[11, c] = 0.0
 
 
-#: The Taylor series (in p^2) of the point coefficients a1, a2, a3, c2, c3, e2, e3 (so3.SERIES, all of one
-#: length), evaluated fused below the series switch; a4 and c4 are not needed at the points.
-_PSER = np.ascontiguousarray(np.array([SERIES[k] for k in ("a1", "a2", "a3", "c2", "c3", "e2", "e3")],
-                                      dtype=np.float64))
-_SWITCH = float(SERIES_SWITCH)
-
-
-@fast
-def _point_coefficients(p, co):
-    """co[:9] = lk.coefficients(p) except a4, c4 (set to 0): the same Taylor series, evaluated fused."""
-    if p < _SWITCH:
-        x = p * p
-        s0 = s1 = s2 = s3 = s4 = s5 = s6 = 0.0
-        for k in range(_PSER.shape[1] - 1, -1, -1):
-            s0 = s0 * x + _PSER[0, k]
-            s1 = s1 * x + _PSER[1, k]
-            s2 = s2 * x + _PSER[2, k]
-            s3 = s3 * x + _PSER[3, k]
-            s4 = s4 * x + _PSER[4, k]
-            s5 = s5 * x + _PSER[5, k]
-            s6 = s6 * x + _PSER[6, k]
-        co[0], co[1], co[2], co[3], co[4], co[5], co[6], co[7], co[8] = s0, s1, s2, 0.0, s3, s4, 0.0, s5, s6
-    else:
-        cf = lk.coefficients(p)
-        for k in range(9):
-            co[k] = cf[k]
-
-
-# The SO(3) maps of flexbody.lie.kernels with the coefficients (lk.coefficients of |phi|, the same for -phi)
-# computed once per point and passed in: the same formulas, the same arithmetic.
-
-
-@fast
-def _exp_co(phi, co, out):
-    a1, a2 = co[0], co[1]
-    p = lk._norm(phi)
-    dd = 1.0 - a2 * p * p
-    x, y, z = phi[0], phi[1], phi[2]
-    out[0, 0], out[0, 1], out[0, 2] = dd + a2 * x * x, -a1 * z + a2 * x * y, a1 * y + a2 * x * z
-    out[1, 0], out[1, 1], out[1, 2] = a1 * z + a2 * y * x, dd + a2 * y * y, -a1 * x + a2 * y * z
-    out[2, 0], out[2, 1], out[2, 2] = -a1 * y + a2 * z * x, a1 * x + a2 * z * y, dd + a2 * z * z
-
-
-@fast
-def _tangent_co(phi, co, out):
-    p = lk._norm(phi)
-    a2, a3 = co[1], co[2]
-    lk._set_identity(1.0 - a3 * p * p, out)
-    lk._add_hat(phi, -a2, out)
-    for i in range(3):
-        for j in range(3):
-            out[i, j] += a3 * phi[i] * phi[j]
-
-
-@fast
-def _d_tangent_co(phi, b, co, out):
-    a2, a3, c2, c3 = co[1], co[2], co[4], co[5]
-    r = lk._cross(phi, b)
-    q = lk._cross(phi, r)
-    lk._set_identity(a3 * lk._dot(phi, b), out)
-    lk._add_hat(b, a2, out)
-    lk._add_hat(r, -a3, out)
-    for i in range(3):
-        for j in range(3):
-            out[i, j] += (c3 * q[i] - c2 * r[i] - a3 * b[i]) * phi[j]
-
-
-@fast
-def _d2_tangent_co(phi, a, b, co, out):
-    a3, c2, c3, e2, e3 = co[2], co[4], co[5], co[7], co[8]
-    r = lk._cross(phi, b)
-    q = lk._cross(phi, r)
-    m = lk._cross(a, b)
-    ur = lk._cross(a, r)
-    ua = lk._cross(b, lk._cross(phi, a))
-    u = (ur[0] + ua[0], ur[1] + ua[1], ur[2] + ua[2])
-    ar, aq = lk._dot(a, r), lk._dot(a, q)
-    lk._set_identity(c3 * aq - c2 * ar - 2.0 * a3 * lk._dot(a, b), out)
-    sc = e3 * aq - e2 * ar
-    for i in range(3):
-        for j in range(3):
-            out[i, j] += (c2 * (m[i] * phi[j] + phi[i] * m[j]) - c3 * (u[i] * phi[j] + phi[i] * u[j])
-                          + a3 * (a[i] * b[j] + b[i] * a[j]) + sc * phi[i] * phi[j])
-
+# The SO(3) coefficients of a point (lk.coefficients of |d|, the same for -d) are computed once
+# (lk.point_coefficients_into) and passed to the maps of flexbody.lie.kernels that take them (inlined).
 
 # ----------------------------------------------------------------------------------------------------------
 # One evaluation of the augmented element at a given bubble b
@@ -341,9 +259,9 @@ def _kinematics_and_stresses(e, b, x, fr, dn, e_ref, to_cart, weights, C, a_ptr,
             da[0, k] = acc0
             da[1, k] = acc1
         Q, T, R, F, co = PQ[p], PT[p], PR[p], PF[p], Pco[p]
-        _point_coefficients(lk._norm(d), co)
-        _exp_co(d, co, Q)
-        _tangent_co(d, co, T)
+        lk.point_coefficients_into(lk._norm(d), co)
+        lk.exp_co_into(d, co, Q)
+        lk.tangent_co_into(d, co, T)
         for k in range(3):
             for l in range(3):
                 acc = 0.0
@@ -541,7 +459,7 @@ def _evaluate_z(e, b, full, x, fr, dn, Ti, Tm, e_ref, to_cart, weights, C, c_sym
                 Gx[3 * a + 1, 9 + l] = fu[2] * t0 - fu[0] * t2
                 Gx[3 * a + 2, 9 + l] = fu[0] * t1 - fu[1] * t0
             DT = DTa[a]
-            _d_tangent_co(d, da[a], co, DT)
+            lk.d_tangent_co_into(d, da[a], co, DT)
             for k in range(3):
                 for l in range(3):
                     Gx[6 + 3 * a + k, 9 + l] = DT[k, l]
@@ -628,12 +546,12 @@ def _evaluate_z(e, b, full, x, fr, dn, Ti, Tm, e_ref, to_cart, weights, C, c_sym
         for k in range(3):
             csum[k] = v3[k] + w3[k]
         negd = (-d[0], -d[1], -d[2])
-        _d_tangent_co(negd, csum, co, M)
+        lk.d_tangent_co_into(negd, csum, co, M)
         for k in range(3):
             for l in range(3):
                 M[k, l] = -M[k, l]
         for a in range(2):
-            _d2_tangent_co(d, bw[a], da[a], co, t33)
+            lk.d2_tangent_co_into(d, bw[a], da[a], co, t33)
             for k in range(3):
                 for l in range(3):
                     M[k, l] += t33[k, l]
@@ -642,7 +560,7 @@ def _evaluate_z(e, b, full, x, fr, dn, Ti, Tm, e_ref, to_cart, weights, C, c_sym
                 Kx[9 + k, 9 + l] += M[k, l]
         # Jd^T Z^T Jda + Jda^T Z Jd,  Z = -D T(-d)[.] b_w
         for a in range(2):
-            _d_tangent_co(negd, bw[a], co, Z)
+            lk.d_tangent_co_into(negd, bw[a], co, Z)
             for k in range(3):
                 for l in range(3):
                     Kx[12 + 3 * a + k, 9 + l] -= Z[k, l]
@@ -741,7 +659,7 @@ def _evaluate_bubble(e, b, x, fr, dn, e_ref, to_cart, weights, C, a_ptr, a_i, a_
             fu = F[a]
             wa = nbr if a == 0 else nbs
             DT = DTa[a]
-            _d_tangent_co(d, da[a], co, DT)
+            lk.d_tangent_co_into(d, da[a], co, DT)
             for q in range(2):
                 t0, t1, t2 = T[0, q], T[1, q], T[2, q]
                 G[3 * a, q] = nb * (fu[1] * t2 - fu[2] * t1)
@@ -795,12 +713,12 @@ def _evaluate_bubble(e, b, x, fr, dn, e_ref, to_cart, weights, C, a_ptr, a_i, a_
         for k in range(3):
             csum[k] = v3[k] + w3[k]
         negd = (-d[0], -d[1], -d[2])
-        _d_tangent_co(negd, csum, co, M)
+        lk.d_tangent_co_into(negd, csum, co, M)
         for k in range(2):
             for l in range(2):
                 M[k, l] = -M[k, l]
         for a in range(2):
-            _d2_tangent_co(d, bw[a], da[a], co, Z)
+            lk.d2_tangent_co_into(d, bw[a], da[a], co, Z)
             for k in range(2):
                 for l in range(2):
                     M[k, l] += Z[k, l]
@@ -809,7 +727,7 @@ def _evaluate_bubble(e, b, x, fr, dn, e_ref, to_cart, weights, C, a_ptr, a_i, a_
             for l in range(2):
                 t33[k, l] += nn * M[k, l]
         for a in range(2):
-            _d_tangent_co(negd, bw[a], co, Z)
+            lk.d_tangent_co_into(negd, bw[a], co, Z)
             wa = nb * (nbr if a == 0 else nbs)
             for k in range(2):
                 for l in range(2):
@@ -955,7 +873,7 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, a_ptr, a_i, a_p, a_j
             f[e, c] = fa[c]
 
 
-@numba.njit(cache=CACHE, parallel=True)
+@_numba.parallel
 def _batch(x_el, fr_el, e_ref, to_cart, weights, C, a_ptr, a_i, a_p, a_j, a_v, used,
            EN, EDN, ENB, EDNB, b0, want_tangent, c_sym, tol, max_iter, n_chunks, f, K, b_out):
     m = x_el.shape[0]

@@ -1,0 +1,124 @@
+"""flexbody's one jit policy: the numba decorators of every kernel, and the only code that touches numba's
+private API.
+
+Decorators (all cached in :data:`flexbody.kernel_cache.CACHE_DIR` when it is usable):
+
+- :data:`plain`: numba's defaults (reference counting, Python error model, no fastmath). Kernels that
+  allocate (workspaces, results) and the small SO(3)/SE(3) building blocks of :mod:`flexbody.lie.kernels`.
+- :data:`released`: :data:`plain` that releases the GIL (the sparse scatter, called from threads).
+- :data:`fast`: the per-element and per-point kernels, which allocate nothing: :data:`FAST_FLAGS`, i.e.
+  numpy's error model (a division by zero gives inf/nan, no exception check), FMA contraction allowed
+  (results agree with the numpy reference to round-off), no reference counting (``_nrt=False``; otherwise
+  every array argument costs an atomic incref/decref per call) and ``noalias`` array arguments (below).
+- :data:`inline`: :data:`fast` inlined at numba-IR level into its callers (small helpers of the point loops).
+- :data:`parallel`: the element loops over ``prange`` chunks (numba's defaults plus ``parallel=True``).
+- :func:`prefetch`: an intrinsic that prefetches the cache line of one array element (a hint, never a fault).
+- :data:`uint`: ``numba.uint64``, for unsigned inner-loop indices with run-time bounds (lets LLVM vectorize).
+
+``noalias``: numba has a compiler flag that declares the data pointers of array arguments ``noalias`` (its
+parfors lowering sets it), but no jit option maps to it. This module adds that mapping (``_noalias``) to
+numba's ``CPUTargetOptions``, once per process, when numba has the pieces; it changes nothing for functions
+that do not ask for it. The contract of a :data:`fast` kernel: no two of its array arguments overlap
+(workspaces are distinct arrays, inputs are only read). Without it LLVM must assume that every store may
+change every array: it reloads values and guards vector loops with run-time overlap checks (the element
+kernel is about 20 % slower).
+
+Version guard: the private pieces (``CPUTargetOptions``, ``TargetOptions.Mapping``, ``Flags.noalias``,
+``_nrt``, ``cgutils.get_or_insert_function``) are known to work for numba in :data:`TESTED_NUMBA`
+(pyproject.toml pins the same range). With a numba outside it, importing this module warns once
+(:func:`version_warning`); whatever private piece is missing is then dropped (:data:`NOALIAS`,
+:data:`NO_NRT` say what is active), which keeps the results and costs speed. ``tests/test_numba_policy.py``
+checks that the flags reach the compiled code.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import llvmlite.binding
+import numba
+import numba.core.cgutils
+import numba.core.compiler
+import numba.core.cpu
+import numba.core.options
+import numba.extending
+from llvmlite import ir
+
+from flexbody.kernel_cache import CACHE
+
+#: numba versions whose private API this module was checked against: [low, high)
+TESTED_NUMBA = ((0, 60), (0, 69))
+
+
+def _version_tuple(version: str) -> tuple[int, int]:
+    """(major, minor) of a version string such as "0.68.1" or "0.69.0rc1"."""
+    parts = []
+    for piece in version.split(".")[:2]:
+        digits = "".join(c for c in piece if c.isdigit()) or "0"
+        parts.append(int(digits))
+    return parts[0], parts[1] if len(parts) > 1 else 0
+
+
+def version_warning(version: str) -> str | None:
+    """The warning for a numba ``version`` outside :data:`TESTED_NUMBA` (None: inside)."""
+    low, high = TESTED_NUMBA
+    if low <= _version_tuple(version) < high:
+        return None
+    return (f"flexbody: numba {version} is outside the tested range {low[0]}.{low[1]} to <{high[0]}.{high[1]}; "
+            f"the kernels' private compiler flags (noalias, no reference counting) are used only if present")
+
+
+_message = version_warning(numba.__version__)
+if _message is not None:
+    warnings.warn(_message, RuntimeWarning, stacklevel=2)
+
+#: ``_nrt=False`` is a jit option of this numba (the fast kernels then run without reference counting)
+NO_NRT: bool = hasattr(numba.core.cpu.CPUTargetOptions, "_nrt")
+#: the ``_noalias`` jit option is available (mapped here onto numba's ``noalias`` compiler flag)
+NOALIAS: bool = hasattr(numba.core.compiler.Flags, "noalias") and hasattr(numba.core.options.TargetOptions,
+                                                                         "Mapping")
+if NOALIAS and not hasattr(numba.core.cpu.CPUTargetOptions, "_noalias"):
+    numba.core.cpu.CPUTargetOptions._noalias = numba.core.options.TargetOptions.Mapping("noalias")
+
+#: the jit options of the allocation-free kernels (module docstring)
+FAST_FLAGS: dict = dict(cache=CACHE, error_model="numpy", fastmath={"contract"})
+if NO_NRT:
+    FAST_FLAGS["_nrt"] = False
+if NOALIAS:
+    FAST_FLAGS["_noalias"] = True
+
+plain = numba.njit(cache=CACHE)
+released = numba.njit(cache=CACHE, nogil=True)
+fast = numba.njit(**FAST_FLAGS)
+inline = numba.njit(inline="always", **FAST_FLAGS)
+parallel = numba.njit(cache=CACHE, parallel=True)
+uint = numba.uint64
+
+# llvm.prefetch is overloaded on the pointer type: "p0" with opaque pointers (LLVM >= 15), "p0i8" before
+_PREFETCH_NAME = "llvm.prefetch.p0" if llvmlite.binding.llvm_version_info >= (15,) else "llvm.prefetch.p0i8"
+
+
+@numba.extending.intrinsic
+def prefetch(typingctx, arr, idx, write):
+    """Prefetch (into L2) the cache line of element idx of arr's data (flat index), to read or, write=True, to write.
+
+    A hint only (never faults, changes no result): the element loop prefetches the data of the elements ahead.
+    ``write`` must be a literal bool.
+    """
+    if not (isinstance(arr, numba.types.Array) and isinstance(idx, numba.types.Integer)
+            and isinstance(write, numba.types.BooleanLiteral)):
+        return None
+    rw = 1 if write.literal_value else 0
+
+    def codegen(context, builder, signature, args):
+        ary = context.make_array(signature.args[0])(context, builder, args[0])
+        i8p = ir.IntType(8).as_pointer()
+        i32 = ir.IntType(32)
+        size = context.get_abi_sizeof(context.get_data_type(signature.args[0].dtype))
+        ptr = builder.gep(builder.bitcast(ary.data, i8p), [builder.mul(args[1], ir.Constant(args[1].type, size))])
+        fnty = ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32])
+        fn = numba.core.cgutils.get_or_insert_function(builder.module, fnty, _PREFETCH_NAME)
+        builder.call(fn, [ptr, ir.Constant(i32, rw), ir.Constant(i32, 2), ir.Constant(i32, 1)])
+        return context.get_dummy_value()
+
+    return numba.types.void(arr, idx, write), codegen
