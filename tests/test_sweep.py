@@ -50,21 +50,29 @@ def test_grid_points_product_and_pairs():
 
 def test_sweep_on_cluster_equals_runs_one_by_one(client, tmp_path):
     """A 2 x 2 sweep over mesh and thickness on 2 worker processes gives exactly the numbers of the same
-    runs made one by one in this process; the table (CSV, JSON) holds them."""
+    runs made one by one in a fresh process (``--workers 0``: in series); the table (CSV, JSON) holds them.
+    (The reference is a fresh process, not this one: after the rest of the test suite, this process once gave
+    48 Newton iterations where a fresh one gives 51, with the same answer to the last digit: see the note in
+    docs/sweeps.md.)"""
     from flexbody.cluster import run_distributed
     tasks = make_tasks(SCENE, grid_points({"nx": [2, 4], "thickness": [0.01, 0.02]}), FIXED)
     rows = _by_index(run_distributed(client, tasks))
     assert sorted(rows) == [0, 1, 2, 3]
+    serial = subprocess.run([sys.executable, "-m", "flexbody.cli", "sweep", SCENE, "--grid", "nx=2,4", "--grid",
+                             "thickness=0.01,0.02", *[f"--set={k}={v}" for k, v in FIXED.items()],
+                             "--workers", "0", "--out", str(tmp_path / "alone")], capture_output=True, text=True)
+    assert serial.returncode == 0, serial.stderr
+    alone_rows = {r["index"]: r for r in json.loads((tmp_path / "alone" / "sweep.json").read_text())["runs"]}
     outputs = set()
     for task in tasks:
-        alone, swept = run_task(task), rows[task.index]
-        assert swept.status == alone.status == "ok"
+        alone, swept = alone_rows[task.index], rows[task.index]
+        assert swept.status == alone["status"] == "ok"
         assert swept.parameters == task.swept
         assert swept.worker.startswith("tcp://")
         for key in ("newton_iterations", "tangent_updates", "factorizations", "steps", "dofs"):
-            assert getattr(swept, key) == getattr(alone, key), key
-        assert swept.outputs == alone.outputs          # bit for bit: the same kernels on one thread
-        assert swept.max_rel_error == alone.max_rel_error
+            assert getattr(swept, key) == alone[key], key
+        assert swept.outputs == alone["outputs"]       # bit for bit: the same kernels on one thread
+        assert swept.max_rel_error == alone["max_rel_error"]
         outputs.add(round(swept.outputs["W_tip"], 9))
     assert len(outputs) == 4                           # the parameters did reach the runs
     assert exit_code(rows.values()) == 0
