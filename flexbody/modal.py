@@ -50,6 +50,7 @@ import scipy.sparse.linalg as spla
 
 from flexbody.body import ShellState
 from flexbody.dynamics import DynamicModel
+from flexbody.lie.so3 import hat
 
 
 # --------------------------------------------------------------------------------------------------------
@@ -61,10 +62,6 @@ def mass_matrix(dynamic: DynamicModel) -> sp.csc_matrix:
     if callable(getter):
         return sp.csc_matrix(getter())
     return sp.diags(np.asarray(dynamic.mass, dtype=float)).tocsc()
-
-
-def _hat(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 def gyroscopic_matrix(dynamic: DynamicModel, state: ShellState, omega) -> sp.csc_matrix:
@@ -81,7 +78,7 @@ def gyroscopic_matrix(dynamic: DynamicModel, state: ShellState, omega) -> sp.csc
     index[m.free] = np.arange(m.n_dof)
     index = index.reshape(n, 6)
     T = dynamic.translation_directions()
-    trans = T.T @ sp.kron(dynamic.body_mass.scalar, 2.0 * _hat(omega)) @ T
+    trans = T.T @ sp.kron(dynamic.body_mass.scalar, 2.0 * hat(omega)) @ T
     spin = state.directors @ omega
     rot = 2.0 * (dynamic.body_mass.rotary * spin)[:, None, None] * np.array([[0.0, -1.0], [1.0, 0.0]])[None]
     idx = index[:, 3:5]
