@@ -151,6 +151,23 @@ def _samples(runs: dict[str, dict], t_end: float, n: int = 11) -> dict:
     return out
 
 
+def _dynamic_output_rows(scene: Scene, fb: dict, ex: dict, ref: dict | None) -> list[dict]:
+    """One row per output: final values and history differences; against the RK4 run if there is one."""
+    rows = []
+    for out in scene.outputs:
+        diff, rel = _history_difference(fb["history"], ex["history"], out.name)
+        row = {"name": out.name, "flexbody": fb["outputs"].get(out.name), "exudyn": ex["outputs"].get(out.name),
+               "max_history_difference": diff, "rel_history_difference": rel}
+        a, b = row["flexbody"], row["exudyn"]
+        row["difference"] = None if a is None or b is None else b - a
+        if ref is not None and ref["history"]["time"]:
+            t_ref = ref["history"]["time"][-1]
+            row["flexbody_vs_rk4"] = _history_difference(ref["history"], fb["history"], out.name, t_ref)[1]
+            row["exudyn_vs_rk4"] = _history_difference(ref["history"], ex["history"], out.name, t_ref)[1]
+        rows.append(row)
+    return rows
+
+
 def _compare_dynamic(scene_name: str, scene_params: dict, options: dict) -> dict:
     """``compare`` for a dynamic scene (see ``compare``)."""
     for key in STATIC_OPTIONS:
@@ -175,18 +192,7 @@ def _compare_dynamic(scene_name: str, scene_params: dict, options: dict) -> dict
                                         end_time=float(options.get("reference_end_time", model.end_time)))
         ref_model.record_every = max(1, int(round(model.time_step / ref_model.time_step)))
         ref = solve_dynamic(ref_model, "rk4", energy_every=int(options.get("energy_every", 1)))
-    rows = []
-    for out in scene.outputs:
-        diff, rel = _history_difference(fb["history"], ex["history"], out.name)
-        row = {"name": out.name, "flexbody": fb["outputs"].get(out.name), "exudyn": ex["outputs"].get(out.name),
-               "max_history_difference": diff, "rel_history_difference": rel}
-        a, b = row["flexbody"], row["exudyn"]
-        row["difference"] = None if a is None or b is None else b - a
-        if ref is not None and ref["history"]["time"]:
-            t_ref = ref["history"]["time"][-1]
-            row["flexbody_vs_rk4"] = _history_difference(ref["history"], fb["history"], out.name, t_ref)[1]
-            row["exudyn_vs_rk4"] = _history_difference(ref["history"], ex["history"], out.name, t_ref)[1]
-        rows.append(row)
+    rows = _dynamic_output_rows(scene, fb, ex, ref)
     ratio, cpu_ratio = _time_ratios(fb, ex)
     ok = bool(fb["converged"] and ex["converged"] and (ref is None or ref["converged"]))
     return {
@@ -196,7 +202,6 @@ def _compare_dynamic(scene_name: str, scene_params: dict, options: dict) -> dict
         "reference_source": "exudyn RK44 on the same ANCF model" if ref is not None else None,
         "wall_time_ratio": ratio, "cpu_time_ratio": cpu_ratio, "ok": ok,
     }
-
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -209,7 +214,7 @@ def compare(scene_name: str, params: dict | None = None) -> dict:
     Parameters
     ----------
     scene_name : a scene of ``MODELS``
-    params : flexbody scene parameters, plus exudyn options prefixed ``exudyn_`` (module docstring)
+    params : flexbody scene parameters, plus exudyn options prefixed ``exudyn_`` (the package docstring)
 
     Returns
     -------
