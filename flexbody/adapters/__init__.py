@@ -1,4 +1,4 @@
-"""Adapters to other codes. Each adapter imports its third-party package only inside its own module.
+"""Adapters to other codes. Each adapter imports its third-party package only inside its own (sub)package.
 
 - ``flexbody.adapters.exudyn``: exudyn reference models of the built-in scenes and the side-by-side
   comparison behind ``flexbody compare SCENE --with exudyn`` (needs ``pip install 'flexbody[exudyn]'``).

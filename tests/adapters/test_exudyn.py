@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+from pathlib import Path
 import subprocess
 import sys
 
@@ -201,6 +203,20 @@ def test_core_and_scenes_do_not_import_exudyn():
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
+def test_flexbody_run_of_the_default_scene_does_not_import_exudyn(tmp_path):
+    """``flexbody run`` (the default scene, in a fresh process) loads neither exudyn nor the adapter."""
+    code = ("import sys; from flexbody.cli import main; rc = main(['run', '--quiet']); "
+            "bad = sorted(m for m in sys.modules if m.split('.')[0] == 'exudyn' "
+            "or m.startswith('flexbody.adapters.exudyn')); "
+            "print(rc, bad); sys.exit(1 if rc != 0 or bad else 0)")
+    repo = str(Path(__file__).resolve().parents[2])
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [repo, os.environ.get("PYTHONPATH")])))
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, cwd=tmp_path,
+                          env=env)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert proc.stdout.strip().splitlines()[-1] == "0 []"
+
+
 # ----------------------------------------------------------------------------------------------------------
 # our shell inside an exudyn system (ObjectGenericODE2, statics)
 # ----------------------------------------------------------------------------------------------------------
@@ -275,7 +291,9 @@ def test_clamp_given_by_exudyn_coordinate_constraints():
 
 def test_compare_cli_reports_an_exudyn_failure(tmp_path, capsys, monkeypatch):
     """exu.SolverError becomes converged = False: the table and JSON are written, the exit code is 2."""
-    settings = fx._settings
+    from flexbody.adapters.exudyn import references_static
+
+    settings = references_static._settings
 
     def one_iteration(model):
         s = settings(model)
@@ -283,7 +301,7 @@ def test_compare_cli_reports_an_exudyn_failure(tmp_path, capsys, monkeypatch):
         s.staticSolver.adaptiveStep = False
         return s
 
-    monkeypatch.setattr(fx, "_settings", one_iteration)
+    monkeypatch.setattr(references_static, "_settings", one_iteration)
     path = tmp_path / "failed.json"
     rc = fx.compare_cli("cantilever_end_shear", {"nx": 2, "steps": 2, "exudyn_model": "beam2d"}, str(path), True)
     err = capsys.readouterr().err
