@@ -1,28 +1,42 @@
-"""A 16-run dynamic sweep on a local Dask cluster against the same runs in series, in one run.
+"""A 16-run dynamic sweep on a local Dask cluster against the same runs in series, in one run, and the overhead
+per task of the sweep as it was first built ("before") and as it is now ("after"), measured on the same cluster.
 
-    python benchmarks/sweep_speedup.py [--workers 2] [--end-time 0.5]
+    python benchmarks/sweep_speedup.py [--workers 2] [--end-time 0.5] [--rounds 1]
 
 The sweep: the spinning plate (``spinning_plate``: free 1 x 1 m plate, 4 x 4 mesh, dt = 2 ms) over
 omega = 5, 10, 15, 20 rad/s and thickness = 10, 15, 20, 25 mm, to ``--end-time`` (16 runs). The series is
 :func:`flexbody.sweep.run_serial` in this process (kernels loaded before the clock starts), half of the runs
-before the cluster's and half after (so that a load of the machine that changes in time affects both alike); the cluster is
-:func:`flexbody.cluster.connect` (N worker processes, one numba thread each) and
+before the cluster's and half after (so that a load of the machine that changes in time affects both alike);
+the cluster is :func:`flexbody.cluster.connect` (N worker processes, one numba thread each) and
 :func:`flexbody.cluster.run_distributed` (each worker loads the kernels once, in its warm-up plugin).
 
-Printed (Markdown): the time of the series, of the sweep on the cluster (from the submission of the first
-task to the last result, the workers' warm-up included) and of the cluster's start, the speed-up, that the
-numbers agree, and the overhead per task in two ways:
-- in the sweep: (elapsed x workers - the workers' warm-up - the tasks' own times) / tasks: the scheduling,
-  the transfer of the task and its row, and the workers idle at the end;
-- of an empty task: the time per task of 200 no-op tasks (submission to result) on the same cluster.
-The machine may be shared: its load average before and after is printed, and its capacity for parallel
-work then (a busy loop in one process against the same loop in N processes at once: N on an idle machine),
-the speed-up the load allowed.
+On the same cluster the sweep runs ``--rounds`` times in each of two ways, alternated (before, after, after,
+before, ...), so that a load that changes in time affects both alike:
+
+- "after": :func:`flexbody.cluster.run_distributed` as it is: the scene source opened once per worker, small
+  rows sent back, the longest runs first, one run at a time per worker thread (worker-saturation 1.0);
+- "before": the sweep as first built: every task opens its scene source, sends back its full summary and
+  history, the tasks in sweep order, Dask's default worker-saturation (1.1: two runs queued per one-thread
+  worker).
+
+Printed (Markdown): the time of the series and of each sweep (from the submission of the first task to the
+last result), the speed-up, that the numbers agree (bit for bit), and the overhead per task, split with
+Dask's task stream into
+- in the task: the task's own time (``total_time_s``: building the scene, solving, making the row) against
+  the same run in series (the slow-down of a run on a busy machine: the capacity, not Dask's);
+- around the task: the time the worker spent on it outside ``run_task`` (unpacking the task, packing the row);
+- between tasks: a worker idle while another task waits for it (scheduling, the transfer of task and row);
+- the tail: workers idle at the end while the last runs finish;
+and an empty task's time (200 no-op tasks). The overhead per task in the sweep is
+(elapsed x workers - the tasks' own time) / tasks = around + between + tail. The machine may be shared: the
+load average before and after is printed, and its capacity for parallel work then (a busy loop in one process
+against the same loop in N processes at once: N on an idle machine), the speed-up the load allowed.
 """
 
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 import os
 import time
 
@@ -31,6 +45,20 @@ from flexbody.sweep import grid_points, make_tasks, run_serial, run_task
 
 def _noop(x):
     return x
+
+
+def _run_as_first_built(task):
+    """A task as the sweep first ran it: the scene source opened in the task, the full summary and history in
+    the row (for the "before" sweep)."""
+    from distributed import get_worker
+    import numba
+    from flexbody.cluster import PLUGIN_NAME
+    worker = get_worker()
+    threads = getattr(worker.plugins.get(PLUGIN_NAME), "threads", 1)
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    row = run_task(replace(task, details=True))
+    row.worker = worker.address
+    return row
 
 
 _BUSY = "import time; t = time.perf_counter(); sum(range(4 * 10**7)); print(time.perf_counter() - t)"
@@ -51,10 +79,54 @@ def machine_capacity(workers: int) -> float:
     return workers * one / max(times(workers))
 
 
+def sweep_before(client, tasks):
+    """The sweep as first built (module docstring); returns its rows."""
+    from distributed import as_completed
+    client.run_on_scheduler(_set_saturation, 1.1)
+    token = time.time_ns()
+    futures = [client.submit(_run_as_first_built, t, key=f"before-{t.index}-{token}", pure=False) for t in tasks]
+    rows = [f.result() for f in as_completed(futures)]
+    client.run_on_scheduler(_set_saturation, 1.0)
+    return rows
+
+
+def _set_saturation(value, dask_scheduler=None):
+    dask_scheduler.WORKER_SATURATION = value
+
+
+def timed_sweep(client, run, tasks, workers: int) -> dict:
+    """Run one sweep (``run(client, tasks)``) under Dask's task stream; its elapsed time and overhead split."""
+    from distributed import get_task_stream
+    with get_task_stream(client) as stream:
+        t0 = time.perf_counter()
+        rows = {r.index: r for r in run(client, tasks)}
+        elapsed = time.perf_counter() - t0
+    spans: dict[str, list[tuple[float, float]]] = {}
+    for rec in stream.data:
+        if not str(rec["key"]).startswith(("flexbody-run", "before")):
+            continue
+        compute = [s for s in rec["startstops"] if s["action"] == "compute"]
+        if compute:
+            spans.setdefault(rec["worker"], []).append((compute[0]["start"], compute[0]["stop"]))
+    begin = min(a for s in spans.values() for a, _ in s)          # the first task's start, on any worker
+    end = max(b for s in spans.values() for _, b in s)            # the last task's stop
+    own = sum(r.total_time_s for r in rows.values())
+    computed = sum(b - a for s in spans.values() for a, b in s)
+    between = sum((max(b for _, b in s) - min(a for a, _ in s)) - sum(b - a for a, b in s) for s in spans.values())
+    tail = sum(end - max(b for _, b in s) for s in spans.values())
+    head = sum(min(a for a, _ in s) - begin for s in spans.values())
+    n = len(tasks)
+    return dict(rows=rows, elapsed=elapsed, own=own, overhead=(elapsed * workers - own) / n,
+                around=(computed - own) / n, between=between / n, tail=tail / n,
+                ends=(elapsed * workers - computed - between - tail) / n,      # head + submission + last result
+                cpu=sum(r.cpu_time_s for r in rows.values()))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--end-time", type=float, default=0.5)
+    parser.add_argument("--rounds", type=int, default=1, help="sweeps of each kind on the cluster (alternated)")
     args = parser.parse_args()
     from flexbody.cluster import connect, run_distributed
 
@@ -68,13 +140,25 @@ def main() -> None:
     serial = {r.index: r for r in run_serial(tasks[::2])}      # half of the series before the cluster ...
     t_serial = time.perf_counter() - t0
 
+    after = lambda client, ts: run_distributed(client, ts)
+    measured = {"before": [], "after": []}
     t0 = time.perf_counter()
     with connect(workers=args.workers) as client:
         t_start = time.perf_counter() - t0
         t0 = time.perf_counter()
-        rows = {r.index: r for r in run_distributed(client, tasks)}
-        t_sweep = time.perf_counter() - t0
+        from collections import Counter
+        from flexbody.cluster import KernelWarmUp, PLUGIN_NAME, _host
+        hosts = Counter(_host(a) for a in client.nthreads())      # (run_distributed registers it again: a no-op)
+        client.register_plugin(KernelWarmUp(tasks[0].scene, tasks[0].parameters, dict(hosts)), name=PLUGIN_NAME)
+        t_warm = time.perf_counter() - t0
         warm = client.run(lambda dask_worker: dask_worker.plugins["flexbody-kernels"].warm_up_s)
+        client.gather(client.map(run_task, tasks[:args.workers], pure=False))   # first calls on each worker
+        kinds = []
+        for r in range(args.rounds):
+            kinds += ["before", "after"] if r % 2 == 0 else ["after", "before"]
+        for kind in kinds:
+            measured[kind].append(timed_sweep(client, sweep_before if kind == "before" else after, tasks,
+                                              args.workers))
         t0 = time.perf_counter()
         client.gather(client.map(_noop, range(200), pure=False))
         t_noop = (time.perf_counter() - t0) / 200
@@ -84,34 +168,46 @@ def main() -> None:
     load_after = os.getloadavg()
     capacity.append(machine_capacity(args.workers))
 
-    same = all(rows[i].outputs == serial[i].outputs and rows[i].newton_iterations == serial[i].newton_iterations
-               for i in serial)
-    statuses = {r.status for r in rows.values()} | {r.status for r in serial.values()}
-    busy = sum(r.total_time_s for r in rows.values())
+    same = all(m["rows"][i].outputs == serial[i].outputs and m["rows"][i].newton_iterations ==
+               serial[i].newton_iterations for ms in measured.values() for m in ms for i in serial)
+    statuses = {r.status for ms in measured.values() for m in ms for r in m["rows"].values()} | \
+        {r.status for r in serial.values()}
+    own_serial = sum(r.total_time_s for r in serial.values())
     cpu_serial = sum(r.cpu_time_s for r in serial.values())
-    cpu_sweep = sum(r.cpu_time_s for r in rows.values())
-    overhead = (t_sweep * args.workers - sum(warm.values()) - busy) / len(tasks)
+    mean = lambda kind, key: sum(m[key] for m in measured[kind]) / len(measured[kind])
     print(f"16-run dynamic sweep (spinning_plate, omega x thickness, end_time {args.end_time} s, "
-          f"{tasks and serial[0].steps} steps each); {os.cpu_count()} cores; load average before "
-          f"{load_before[0]:.2f} / {load_before[1]:.2f} (1 / 5 min), after {load_after[0]:.2f} / {load_after[1]:.2f}")
+          f"{serial[0].steps} steps each) on {args.workers} workers; {os.cpu_count()} cores; load average before "
+          f"{load_before[0]:.2f} / {load_before[1]:.2f} (1 / 5 min), after {load_after[0]:.2f} / {load_after[1]:.2f}; "
+          f"{args.rounds} sweep(s) of each kind, alternated")
     print()
-    print("| | wall time [s] |")
-    print("|---|---:|")
-    print(f"| 16 runs in series, in process | {t_serial:.2f} |")
-    print(f"| 16 runs on {args.workers} workers (warm-up included) | {t_sweep:.2f} |")
-    print(f"| starting the local cluster | {t_start:.2f} |")
-    print(f"| workers' warm-up (kernels loaded once per worker) | "
-          f"{', '.join(f'{v:.2f}' for v in warm.values())} |")
+    print("| | before | after |")
+    print("|---|---:|---:|")
+    print(f"| 16 runs in series, in process [s] | {t_serial:.2f} | {t_serial:.2f} |")
+    print(f"| 16 runs on {args.workers} workers [s] | {mean('before', 'elapsed'):.2f} | {mean('after', 'elapsed'):.2f} |")
+    print(f"| speed-up | {t_serial / mean('before', 'elapsed'):.2f} | {t_serial / mean('after', 'elapsed'):.2f} |")
+    print(f"| **overhead per task** [ms] | **{mean('before', 'overhead') * 1e3:.0f}** | "
+          f"**{mean('after', 'overhead') * 1e3:.0f}** |")
+    print(f"| - around the task (unpack task, pack row) [ms] | {mean('before', 'around') * 1e3:.1f} | "
+          f"{mean('after', 'around') * 1e3:.1f} |")
+    print(f"| - between tasks (scheduling, transfer) [ms] | {mean('before', 'between') * 1e3:.1f} | "
+          f"{mean('after', 'between') * 1e3:.1f} |")
+    print(f"| - at the start and the end (submission, first dispatch, last result) [ms] | "
+          f"{mean('before', 'ends') * 1e3:.1f} | {mean('after', 'ends') * 1e3:.1f} |")
+    print(f"| - the tail (workers idle at the end) [ms] | {mean('before', 'tail') * 1e3:.0f} | "
+          f"{mean('after', 'tail') * 1e3:.0f} |")
+    print(f"| tasks' own time on the workers / in series | {mean('before', 'own') / own_serial:.3f} | "
+          f"{mean('after', 'own') / own_serial:.3f} |")
+    print(f"| mean task (own time) on the workers [s] | {mean('before', 'own') / 16:.3f} | "
+          f"{mean('after', 'own') / 16:.3f} |")
     print()
-    print(f"speed-up {t_serial / t_sweep:.2f}x (sweep alone), {t_serial / (t_sweep + t_start):.2f}x "
-          f"(cluster start included); same numbers: {same}; statuses: {sorted(statuses)}")
+    print(f"same numbers (every sweep against the series, bit for bit): {same}; statuses: {sorted(statuses)}")
+    print(f"starting the local cluster {t_start:.2f} s; the workers' warm-up (kernels loaded once per worker) "
+          f"{', '.join(f'{v:.2f}' for v in warm.values())} s ({t_warm:.2f} s to register it)")
     print(f"the machine's capacity for {args.workers} processes (a busy loop in 1 process against {args.workers} at "
           f"once): {capacity[0]:.2f}x before, {capacity[1]:.2f}x after: the speed-up its load allowed")
-    print(f"CPU time of the 16 runs: {cpu_serial:.2f} s in series, {cpu_sweep:.2f} s on the workers; the runs got "
-          f"{cpu_serial / t_serial:.2f} cores in series and {cpu_sweep / t_sweep:.2f} cores on the cluster "
-          f"(CPU time / elapsed)")
-    print(f"overhead per task: {overhead * 1e3:.0f} ms in the sweep ((elapsed x workers - warm-up - task time) / tasks; "
-          f"mean task {busy / len(tasks):.2f} s), {t_noop * 1e3:.1f} ms per empty task")
+    print(f"CPU time of the 16 runs: {cpu_serial:.2f} s in series (own time {own_serial:.2f} s), "
+          f"{mean('before', 'cpu'):.2f} s / {mean('after', 'cpu'):.2f} s on the workers (before / after)")
+    print(f"an empty task: {t_noop * 1e3:.1f} ms")
 
 
 if __name__ == "__main__":
