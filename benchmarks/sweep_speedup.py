@@ -10,14 +10,16 @@ before the cluster's and half after (so that a load of the machine that changes 
 the cluster is :func:`flexbody.cluster.connect` (N worker processes, one numba thread each) and
 :func:`flexbody.cluster.run_distributed` (each worker loads the kernels once, in its warm-up plugin).
 
-On the same cluster the sweep runs ``--rounds`` times in each of two ways, alternated (before, after, after,
-before, ...), so that a load that changes in time affects both alike:
+The sweep runs ``--rounds`` times in each of two ways, alternated (before, after, after, before, ...) so
+that a load that changes in time affects both alike, each on a local cluster of its own:
 
-- "after": :func:`flexbody.cluster.run_distributed` as it is: the scene source opened once per worker, small
-  rows sent back, the longest runs first, one run at a time per worker thread (worker-saturation 1.0);
-- "before": the sweep as first built: every task opens its scene source, sends back its full summary and
-  history, the tasks in sweep order, Dask's default worker-saturation (1.1: two runs queued per one-thread
-  worker).
+- "after": :func:`flexbody.cluster.connect` and :func:`flexbody.cluster.run_distributed` as they are: the
+  scene source opened once per worker, small rows sent back, the longest runs first, the quieter Dask
+  settings of ``flexbody.cluster.WORKER_CONFIG`` (one run at a time per worker thread, no work stealing,
+  fewer periodic callbacks in the workers and the scheduler);
+- "before": the sweep as first built: every task opens its scene source and sends back its full summary and
+  history, the tasks in sweep order, Dask's defaults but for the profiler (worker-saturation 1.1: two runs
+  queued per one-thread worker; work stealing; a 20 ms tick, ...).
 
 Printed (Markdown): the time of the series and of each sweep (from the submission of the first task to the
 last result), the speed-up, that the numbers agree (bit for bit), and the overhead per task, split with
@@ -28,7 +30,10 @@ Dask's task stream into
 - between tasks: a worker idle while another task waits for it (scheduling, the transfer of task and row);
 - the tail: workers idle at the end while the last runs finish;
 and an empty task's time (200 no-op tasks). The overhead per task in the sweep is
-(elapsed x workers - the tasks' own time) / tasks = around + between + tail. The machine may be shared: the
+(elapsed x workers - the tasks' own time) / tasks = around + between + ends + tail. Less sensitive to the load
+of a shared machine: Dask's CPU time per task outside the runs (the worker processes' CPU time less the tasks'
+threads', plus this process's: the scheduler and the client), which a 2-core machine takes from the runs. The
+machine may be shared: the
 load average before and after is printed, and its capacity for parallel work then (a busy loop in one process
 against the same loop in N processes at once: N on an idle machine), the speed-up the load allowed.
 """
@@ -36,6 +41,7 @@ against the same loop in N processes at once: N on an idle machine), the speed-u
 from __future__ import annotations
 
 import argparse
+from contextlib import contextmanager
 from dataclasses import replace
 import os
 import time
@@ -80,27 +86,50 @@ def machine_capacity(workers: int) -> float:
 
 
 def sweep_before(client, tasks):
-    """The sweep as first built (module docstring); returns its rows."""
+    """The sweep as first built (module docstring): the tasks in sweep order; returns its rows."""
     from distributed import as_completed
-    client.run_on_scheduler(_set_saturation, 1.1)
     token = time.time_ns()
     futures = [client.submit(_run_as_first_built, t, key=f"before-{t.index}-{token}", pure=False) for t in tasks]
-    rows = [f.result() for f in as_completed(futures)]
-    client.run_on_scheduler(_set_saturation, 1.0)
-    return rows
+    return [f.result() for f in as_completed(futures)]
 
 
-def _set_saturation(value, dask_scheduler=None):
-    dask_scheduler.WORKER_SATURATION = value
+def sweep_after(client, tasks):
+    from flexbody.cluster import run_distributed
+    return run_distributed(client, tasks)
+
+
+@contextmanager
+def cluster_as_first_built(workers: int):
+    """The local cluster as :func:`flexbody.cluster.connect` first made it: Dask's defaults but the profiler."""
+    import logging
+    import dask
+    from distributed import Client, LocalCluster
+    with dask.config.set({"distributed.worker.profile.enabled": False}):
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                               host="127.0.0.1", silence_logs=logging.CRITICAL,
+                               env={"NUMBA_NUM_THREADS": str(max(1, (os.cpu_count() or 1) // workers))})
+    client = Client(cluster)
+    try:
+        yield client
+    finally:
+        client.close()
+        cluster.close()
+
+
+def _process_cpu(dask_worker=None) -> float:
+    return time.process_time()
 
 
 def timed_sweep(client, run, tasks, workers: int) -> dict:
     """Run one sweep (``run(client, tasks)``) under Dask's task stream; its elapsed time and overhead split."""
     from distributed import get_task_stream
+    cpu0, here0 = client.run(_process_cpu), time.process_time()
     with get_task_stream(client) as stream:
         t0 = time.perf_counter()
         rows = {r.index: r for r in run(client, tasks)}
         elapsed = time.perf_counter() - t0
+    here, cpu1 = time.process_time() - here0, client.run(_process_cpu)
+    workers_cpu = sum(cpu1[w] - cpu0[w] for w in cpu0)
     spans: dict[str, list[tuple[float, float]]] = {}
     for rec in stream.data:
         if not str(rec["key"]).startswith(("flexbody-run", "before")):
@@ -119,7 +148,8 @@ def timed_sweep(client, run, tasks, workers: int) -> dict:
     return dict(rows=rows, elapsed=elapsed, own=own, overhead=(elapsed * workers - own) / n,
                 around=(computed - own) / n, between=between / n, tail=tail / n,
                 ends=(elapsed * workers - computed - between - tail) / n,      # head + submission + last result
-                cpu=sum(r.cpu_time_s for r in rows.values()))
+                cpu=sum(r.cpu_time_s for r in rows.values()),
+                dask_cpu=(workers_cpu - sum(r.cpu_time_s for r in rows.values()) + here) / n)
 
 
 def main() -> None:
@@ -128,7 +158,8 @@ def main() -> None:
     parser.add_argument("--end-time", type=float, default=0.5)
     parser.add_argument("--rounds", type=int, default=1, help="sweeps of each kind on the cluster (alternated)")
     args = parser.parse_args()
-    from flexbody.cluster import connect, run_distributed
+    from collections import Counter
+    from flexbody.cluster import PLUGIN_NAME, KernelWarmUp, _host, connect
 
     grid = {"omega": [5.0, 10.0, 15.0, 20.0], "thickness": [0.01, 0.015, 0.02, 0.025]}
     tasks = make_tasks("spinning_plate", grid_points(grid), {"end_time": args.end_time})
@@ -140,28 +171,25 @@ def main() -> None:
     serial = {r.index: r for r in run_serial(tasks[::2])}      # half of the series before the cluster ...
     t_serial = time.perf_counter() - t0
 
-    after = lambda client, ts: run_distributed(client, ts)
-    measured = {"before": [], "after": []}
-    t0 = time.perf_counter()
-    with connect(workers=args.workers) as client:
-        t_start = time.perf_counter() - t0
+    measured: dict[str, list[dict]] = {"before": [], "after": []}
+    kinds = []
+    for r in range(args.rounds):
+        kinds += ["before", "after"] if r % 2 == 0 else ["after", "before"]
+    starts, warm, noop = {}, {}, {}
+    for kind in kinds:
         t0 = time.perf_counter()
-        from collections import Counter
-        from flexbody.cluster import KernelWarmUp, PLUGIN_NAME, _host
-        hosts = Counter(_host(a) for a in client.nthreads())      # (run_distributed registers it again: a no-op)
-        client.register_plugin(KernelWarmUp(tasks[0].scene, tasks[0].parameters, dict(hosts)), name=PLUGIN_NAME)
-        t_warm = time.perf_counter() - t0
-        warm = client.run(lambda dask_worker: dask_worker.plugins["flexbody-kernels"].warm_up_s)
-        client.gather(client.map(run_task, tasks[:args.workers], pure=False))   # first calls on each worker
-        kinds = []
-        for r in range(args.rounds):
-            kinds += ["before", "after"] if r % 2 == 0 else ["after", "before"]
-        for kind in kinds:
-            measured[kind].append(timed_sweep(client, sweep_before if kind == "before" else after, tasks,
-                                              args.workers))
-        t0 = time.perf_counter()
-        client.gather(client.map(_noop, range(200), pure=False))
-        t_noop = (time.perf_counter() - t0) / 200
+        with (connect(workers=args.workers) if kind == "after" else cluster_as_first_built(args.workers)) as client:
+            starts.setdefault(kind, []).append(time.perf_counter() - t0)
+            hosts = dict(Counter(_host(a) for a in client.nthreads()))
+            client.register_plugin(KernelWarmUp(tasks[0].scene, tasks[0].parameters, hosts), name=PLUGIN_NAME)
+            warm.setdefault(kind, []).extend(client.run(lambda dask_worker: dask_worker.plugins[PLUGIN_NAME].warm_up_s)
+                                             .values())
+            client.gather(client.map(run_task, tasks[:args.workers], pure=False))   # first calls on the workers
+            run = sweep_before if kind == "before" else sweep_after
+            measured[kind].append(timed_sweep(client, run, tasks, args.workers))
+            t0 = time.perf_counter()
+            client.gather(client.map(_noop, range(200), pure=False))
+            noop.setdefault(kind, []).append((time.perf_counter() - t0) / 200)
     t0 = time.perf_counter()
     serial.update({r.index: r for r in run_serial(tasks[1::2])})   # ... and half after (a load that changes)
     t_serial += time.perf_counter() - t0
@@ -195,19 +223,24 @@ def main() -> None:
           f"{mean('before', 'ends') * 1e3:.1f} | {mean('after', 'ends') * 1e3:.1f} |")
     print(f"| - the tail (workers idle at the end) [ms] | {mean('before', 'tail') * 1e3:.0f} | "
           f"{mean('after', 'tail') * 1e3:.0f} |")
+    print(f"| **Dask's CPU time per task outside the runs** (workers' other threads, scheduler, client) [ms] | "
+          f"**{mean('before', 'dask_cpu') * 1e3:.0f}** | **{mean('after', 'dask_cpu') * 1e3:.0f}** |")
+    print(f"| CPU time of the 16 runs' own threads [s] (in series: {cpu_serial:.2f}) | {mean('before', 'cpu'):.2f} | "
+          f"{mean('after', 'cpu'):.2f} |")
+    print(f"| an empty task [ms] | {sum(noop['before']) / len(noop['before']) * 1e3:.1f} | "
+          f"{sum(noop['after']) / len(noop['after']) * 1e3:.1f} |")
+    print(f"| starting the local cluster [s] | {sum(starts['before']) / len(starts['before']):.2f} | "
+          f"{sum(starts['after']) / len(starts['after']):.2f} |")
+    print(f"| the workers' warm-up (kernels loaded once per worker) [s] | {', '.join(f'{v:.2f}' for v in warm['before'])} | "
+          f"{', '.join(f'{v:.2f}' for v in warm['after'])} |")
     print(f"| tasks' own time on the workers / in series | {mean('before', 'own') / own_serial:.3f} | "
           f"{mean('after', 'own') / own_serial:.3f} |")
     print(f"| mean task (own time) on the workers [s] | {mean('before', 'own') / 16:.3f} | "
           f"{mean('after', 'own') / 16:.3f} |")
     print()
     print(f"same numbers (every sweep against the series, bit for bit): {same}; statuses: {sorted(statuses)}")
-    print(f"starting the local cluster {t_start:.2f} s; the workers' warm-up (kernels loaded once per worker) "
-          f"{', '.join(f'{v:.2f}' for v in warm.values())} s ({t_warm:.2f} s to register it)")
     print(f"the machine's capacity for {args.workers} processes (a busy loop in 1 process against {args.workers} at "
           f"once): {capacity[0]:.2f}x before, {capacity[1]:.2f}x after: the speed-up its load allowed")
-    print(f"CPU time of the 16 runs: {cpu_serial:.2f} s in series (own time {own_serial:.2f} s), "
-          f"{mean('before', 'cpu'):.2f} s / {mean('after', 'cpu'):.2f} s on the workers (before / after)")
-    print(f"an empty task: {t_noop * 1e3:.1f} ms")
 
 
 if __name__ == "__main__":

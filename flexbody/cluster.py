@@ -33,13 +33,27 @@ from flexbody.sweep import SourceCache, SweepInterrupted, SweepRow, SweepTask, e
 
 PLUGIN_NAME = "flexbody-kernels"
 
-#: the Dask settings of the local cluster: no statistical profiler in the workers (its thread samples the
-#: stack of the running task every 10 ms, which costs a Python-bound run time; on a cluster started by hand
-#: the same with DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=False in the workers' environment,
-#: docs/sweeps.md), and a scheduler that gives each worker thread one run at a time (worker-saturation 1.0;
-#: Dask's default 1.1 gives a one-thread worker two, and the second of a worker still busy with a long
-#: run waits there while another worker idles at the end of the sweep)
-WORKER_CONFIG = {"distributed.worker.profile.enabled": False, "distributed.scheduler.worker-saturation": 1.0}
+#: the Dask settings of the local cluster (its scheduler runs in this process, its workers are separate
+#: processes that share this machine's cores with it). Measured with benchmarks/sweep_speedup.py, Dask's
+#: defaults cost a sweep of 16 runs of about 1 s some 1.3 s of CPU time outside the runs (in the workers'
+#: other threads and in the scheduler), which on a 2-core machine is taken from the runs; with these
+#: settings 0.3 s:
+#: - no statistical profiler in the workers (its thread samples the stack of the running task every 10 ms);
+#: - the event loops' health check ("tick") every 1 s instead of 20 ms, the system monitor every 5 s instead
+#:   of 0.5 s, no GIL-contention monitor, the memory monitor every 1 s instead of 0.1 s: each wakes a
+#:   thread that takes the GIL from the running task;
+#: - one run at a time per worker thread (worker-saturation 1.0; Dask's default 1.1 gives a one-thread
+#:   worker two, the second of which waits there while another worker idles at the end of the sweep), and
+#:   so no work stealing (nothing waits on a worker to be stolen).
+#: On a cluster started by hand, the same through the workers' and the scheduler's environment
+#: (DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED=False etc.: docs/sweeps.md).
+WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
+                 "distributed.admin.tick.interval": "1s",
+                 "distributed.admin.system-monitor.interval": "5s",
+                 "distributed.admin.system-monitor.gil.enabled": False,
+                 "distributed.worker.memory.monitor-interval": "1s",
+                 "distributed.scheduler.worker-saturation": 1.0,
+                 "distributed.scheduler.work-stealing": False}
 
 
 def _host(address: str) -> str:
