@@ -24,9 +24,11 @@ that a load that changes in time affects both alike, each on a local cluster of 
 Printed (Markdown): the time of the series and of each sweep (from the submission of the first task to the
 last result), the speed-up, that the numbers agree (bit for bit), and the overhead per task, split with
 Dask's task stream into
-- in the task: the task's own time (``total_time_s``: building the scene, solving, making the row) against
-  the same run in series (the slow-down of a run on a busy machine: the capacity, not Dask's);
-- around the task: the time the worker spent on it outside ``run_task`` (unpacking the task, packing the row);
+- in the task: the task's own time (``total_time_s``: building the scene, solving, making the row, freeing
+  the run's memory) against the same run in series (the slow-down of a run on a busy machine: the capacity,
+  not Dask's);
+- around the task: the time the worker's thread spent on it outside ``run_task`` (finding the worker and its
+  plugin, setting the numba threads);
 - between tasks: a worker idle while another task waits for it (scheduling, the transfer of task and row);
 - the tail: workers idle at the end while the last runs finish;
 and an empty task's time (200 no-op tasks). The overhead per task in the sweep is
@@ -149,7 +151,8 @@ def timed_sweep(client, run, tasks, workers: int) -> dict:
                 around=(computed - own) / n, between=between / n, tail=tail / n,
                 ends=(elapsed * workers - computed - between - tail) / n,      # head + submission + last result
                 cpu=sum(r.cpu_time_s for r in rows.values()),
-                dask_cpu=(workers_cpu - sum(r.cpu_time_s for r in rows.values()) + here) / n)
+                dask_cpu=(workers_cpu - sum(r.cpu_time_s for r in rows.values()) + here) / n,
+                dask_cpu_rate=(workers_cpu - sum(r.cpu_time_s for r in rows.values()) + here) / elapsed)
 
 
 def main() -> None:
@@ -215,7 +218,7 @@ def main() -> None:
     print(f"| speed-up | {t_serial / mean('before', 'elapsed'):.2f} | {t_serial / mean('after', 'elapsed'):.2f} |")
     print(f"| **overhead per task** [ms] | **{mean('before', 'overhead') * 1e3:.0f}** | "
           f"**{mean('after', 'overhead') * 1e3:.0f}** |")
-    print(f"| - around the task (unpack task, pack row) [ms] | {mean('before', 'around') * 1e3:.1f} | "
+    print(f"| - around the task (in the worker's thread, outside the run) [ms] | {mean('before', 'around') * 1e3:.1f} | "
           f"{mean('after', 'around') * 1e3:.1f} |")
     print(f"| - between tasks (scheduling, transfer) [ms] | {mean('before', 'between') * 1e3:.1f} | "
           f"{mean('after', 'between') * 1e3:.1f} |")
@@ -225,6 +228,8 @@ def main() -> None:
           f"{mean('after', 'tail') * 1e3:.0f} |")
     print(f"| **Dask's CPU time per task outside the runs** (workers' other threads, scheduler, client) [ms] | "
           f"**{mean('before', 'dask_cpu') * 1e3:.0f}** | **{mean('after', 'dask_cpu') * 1e3:.0f}** |")
+    print(f"| the same per second of the sweep (a share of one core) [ms/s] | {mean('before', 'dask_cpu_rate') * 1e3:.0f} | "
+          f"{mean('after', 'dask_cpu_rate') * 1e3:.0f} |")
     print(f"| CPU time of the 16 runs' own threads [s] (in series: {cpu_serial:.2f}) | {mean('before', 'cpu'):.2f} | "
           f"{mean('after', 'cpu'):.2f} |")
     print(f"| an empty task [ms] | {sum(noop['before']) / len(noop['before']) * 1e3:.1f} | "
