@@ -160,7 +160,8 @@ def connect(workers: int | None = None, scheduler: str | None = None, quiet: boo
     """A :class:`distributed.Client`: of the cluster at ``scheduler`` (an address, or the JSON file a
     ``dask scheduler --scheduler-file FILE`` wrote), else of a local cluster of ``workers``
     processes (default: the number of cores), one task at a time each, whose numba pool has the cores per
-    worker (one thread when the workers outnumber the cores). Closed (and the local cluster stopped) on exit."""
+    worker (one thread when the workers outnumber the cores), with the Dask settings of :data:`WORKER_CONFIG`.
+    Closed (and the local cluster stopped) on exit."""
     if scheduler:
         is_file = scheduler.endswith(".json") and os.path.isfile(scheduler)
         try:

@@ -303,3 +303,18 @@ def test_second_sweep_reuses_the_workers_warm_up_and_sources(client):
     assert client.run(lambda dask_worker: dask_worker.plugins[PLUGIN_NAME].sources.opened) == \
         {address: 1 for address in plugins}
     assert all(first[i].outputs == second[i].outputs and first[i].status == "ok" for i in first)
+
+
+def test_local_cluster_runs_with_the_quiet_settings(client):
+    """The local cluster's scheduler gives each worker thread one run at a time and steals nothing; its
+    workers run without the profiler and with the slow health check and monitors (flexbody.cluster.WORKER_CONFIG)."""
+    from flexbody.cluster import WORKER_CONFIG
+    scheduler = client.run_on_scheduler(lambda dask_scheduler: (dask_scheduler.WORKER_SATURATION,
+                                                                "stealing" in dask_scheduler.extensions))
+    assert scheduler == (1.0, False)
+
+    def settings():
+        import dask
+        return {key: dask.config.get(key) for key in WORKER_CONFIG}
+
+    assert list(client.run(settings).values()) == [WORKER_CONFIG] * 2
