@@ -180,7 +180,9 @@ def connect(workers: int | None = None, scheduler: str | None = None, quiet: boo
     with _sigint_ignored(), dask.config.set(WORKER_CONFIG):   # workers immune to Ctrl-C: this process stops them
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
                                host="127.0.0.1", silence_logs=logging.CRITICAL,
-                               env={"NUMBA_NUM_THREADS": str(threads)})
+                               env={"NUMBA_NUM_THREADS": str(threads)},
+                               config=dict(WORKER_CONFIG))   # also for a worker its nanny restarts later (the
+                                                             # nanny's copy of the config set here is shallow)
     client = Client(cluster)
     try:
         yield client

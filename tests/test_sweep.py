@@ -307,7 +307,8 @@ def test_second_sweep_reuses_the_workers_warm_up_and_sources(client):
 
 def test_local_cluster_runs_with_the_quiet_settings(client):
     """The local cluster's scheduler gives each worker thread one run at a time and steals nothing; its
-    workers run without the profiler and with the slow health check and monitors (flexbody.cluster.WORKER_CONFIG)."""
+    workers run without the profiler and with the slow health check and monitors (flexbody.cluster.WORKER_CONFIG),
+    also a worker that its nanny restarted (after the lost-worker test: it once came back with Dask's defaults)."""
     from flexbody.cluster import WORKER_CONFIG
     scheduler = client.run_on_scheduler(lambda dask_scheduler: (dask_scheduler.WORKER_SATURATION,
                                                                 "stealing" in dask_scheduler.extensions))
