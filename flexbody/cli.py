@@ -657,7 +657,8 @@ def _bench_on_cluster(args, sources, plans, common: dict) -> int:
     for source, meshes in zip(sources, plans):
         density = list(meshes[0]) or list(source.density)
         for mesh in meshes:
-            task = replace(make_tasks(source.name, [mesh], common)[0], index=len(tasks))  # one numbering
+            task = replace(make_tasks(source.name, [mesh], common, details=True)[0],  # the report's
+                           index=len(tasks))                                # histories; one numbering
             tasks.append(task)
             labels.append((source.name, mesh_label({**source.density, **task.parameters}, density)))
 

@@ -43,6 +43,9 @@ class SweepTask:
     parameters : the overrides the scene is built with (swept and fixed ones)
     swept : the swept parameters alone (the table's parameter columns)
     h5 : the HDF5 results file of this run, or None
+    details : return the run's full summary, tracked-output history and reference in the row (what
+        ``flexbody bench`` reports); without it the row holds what the table has, which is what a task on a
+        cluster sends back (a few hundred bytes instead of the histories of every step)
     """
 
     index: int
@@ -50,6 +53,7 @@ class SweepTask:
     parameters: dict
     swept: dict
     h5: str | None = None
+    details: bool = False
 
 
 @dataclass
@@ -60,8 +64,9 @@ class SweepRow:
     (completed but failed those checks: ``warnings``), "not converged" (the analysis stopped early:
     ``message`` says where and why), "failed" (the scene could not be built, a bad parameter value, or the
     analysis raised), "lost" (the task never returned: its worker died), "cancelled" (stopped by Ctrl-C
-    before it finished). ``summary`` and ``history`` hold the run's full summary (``RunSummary.as_dict()``)
-    and tracked-output history; they are not written to the table.
+    before it finished). ``summary``, ``history`` and ``reference`` hold the run's full summary
+    (``RunSummary.as_dict()``), tracked-output history and reference when its task asked for them
+    (``SweepTask.details``, as ``flexbody bench`` does), else they are empty; they are not written to the table.
     """
 
     index: int
@@ -70,7 +75,8 @@ class SweepRow:
     message: str = ""
     max_rel_error: float = math.nan
     wall_time_s: float = math.nan            # the solve (set-up and compilation excluded)
-    total_time_s: float = math.nan           # the whole task: building the scene, loading kernels, solving
+    total_time_s: float = math.nan           # the whole task: building the scene, loading kernels, solving,
+                                             # making the row, freeing the run's memory
     cpu_time_s: float = math.nan             # the CPU time of the thread that ran the task (numba's other
                                              # threads not counted): below total_time_s on a shared machine
     steps: int = 0
@@ -134,17 +140,58 @@ def grid_points(grids: dict[str, list], paired: bool = False) -> list[dict]:
     return [dict(zip(keys, row)) for row in rows]
 
 
-def make_tasks(scene: str, points: list[dict], fixed: dict | None = None, h5_dir: str | None = None) -> list[SweepTask]:
+def make_tasks(scene: str, points: list[dict], fixed: dict | None = None, h5_dir: str | None = None,
+               details: bool = False) -> list[SweepTask]:
     """The tasks of a sweep of ``scene`` over ``points`` (each with the ``fixed`` overrides under it); with
-    ``h5_dir`` each run writes ``h5_dir/run_<index>.h5``. A scene file is named by its absolute path."""
+    ``h5_dir`` each run writes ``h5_dir/run_<index>.h5``; with ``details`` the rows carry each run's full
+    summary and history (:class:`SweepTask`). A scene file is named by its absolute path."""
     if os.path.splitext(scene)[1].lower() in (".toml", ".py"):
         scene = os.path.abspath(scene)
     width = max(4, len(str(len(points) - 1)))
     tasks = []
     for i, point in enumerate(points):
         h5 = os.path.abspath(os.path.join(h5_dir, f"run_{i:0{width}d}.h5")) if h5_dir else None
-        tasks.append(SweepTask(i, scene, {**(fixed or {}), **point}, dict(point), h5))
+        tasks.append(SweepTask(i, scene, {**(fixed or {}), **point}, dict(point), h5, details))
     return tasks
+
+
+#: the parameters whose value is a run's number of time or load steps, and its time step
+_STEP_KEYS = ("steps", "analysis.steps")
+_TIME_KEYS = (("end_time", "dt"), ("analysis.end_time", "analysis.dt"))
+
+
+def estimated_cost(task: SweepTask, sources: SourceCache) -> float:
+    """A relative estimate of a run's time, to start the longest runs of a sweep first: the product of its
+    mesh-density parameters (the scene's ``density`` keys: the elements, up to a constant) and of its steps
+    (``steps``, or ``end_time / dt``), as far as the task sets them. A value the task does not set is the
+    scene's default in every run of the sweep, a common factor left out. Runs that differ only in other
+    values (a thickness, a spin rate) have one estimate; 0 for a scene that cannot be opened (its runs fail
+    at once). Not a time: only the order of the estimates of one scene's runs means something."""
+    from flexbody.scenes.sources import SceneError
+    try:
+        density = sources.get(task.scene).density
+    except (SceneError, OSError):
+        return 0.0
+    p = task.parameters
+
+    def number(key) -> float | None:
+        value = p.get(key)
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0
+        return float(value) if ok else None
+
+    cost = 1.0
+    for key in density:
+        for name in (key, key.rpartition(".")[2]):       # a TOML scene's "mesh.nx" is also set as "nx"
+            if number(name) is not None:
+                cost *= number(name)
+                break
+    steps = next((number(k) for k in _STEP_KEYS if number(k) is not None), None)
+    if steps is None:
+        for end, dt in _TIME_KEYS:
+            if number(end) is not None or number(dt) is not None:
+                steps = (number(end) or 1.0) / (number(dt) or 1.0)
+                break
+    return cost * (steps or 1.0)
 
 
 def _failure_text(exc: BaseException) -> str:
@@ -159,14 +206,15 @@ def failed_row(task: SweepTask, status: str, message: str, **extra) -> SweepRow:
 
 
 def row_from_summary(task: SweepTask, summary, total_time: float, scene=None) -> SweepRow:
-    """The row of a run that finished (converged or not) from its ``RunSummary`` / ``DynamicRunSummary``."""
+    """The row of a run that finished (converged or not) from its ``RunSummary`` / ``DynamicRunSummary``;
+    with ``task.details`` also its full summary, history and reference."""
     d = summary.as_dict()
     if not d["converged"]:
         status = "not converged"
     else:
         status = "untrusted" if d.get("warnings") else "ok"
     reference = None
-    if scene is not None and scene.reference is not None:
+    if task.details and scene is not None and scene.reference is not None:
         reference = {k: (list(map(float, scene.reference.load_factors)), list(map(float, v)))
                      for k, v in scene.reference.values.items()}
     error = d.get("max_rel_error")
@@ -175,31 +223,69 @@ def row_from_summary(task: SweepTask, summary, total_time: float, scene=None) ->
                     total_time_s=total_time, steps=int(d["steps"]), newton_iterations=int(d["newton_iterations"]),
                     tangent_updates=int(d["tangent_updates"]), factorizations=int(d["factorizations"]),
                     dofs=int(d["dofs"]), outputs={k: float(v) for k, v in d["outputs"].items()},
-                    warnings=list(d.get("warnings", [])), h5=task.h5, summary=d,
-                    history={k: list(map(float, v)) for k, v in summary.history.items()}, reference=reference,
+                    warnings=list(d.get("warnings", [])), h5=task.h5, summary=d if task.details else {},
+                    history={k: list(map(float, v)) for k, v in summary.history.items()} if task.details else {},
+                    reference=reference,
                     reference_source=scene.reference.source if scene is not None and scene.reference else "")
 
 
-def run_task(task: SweepTask) -> SweepRow:
+def run_task(task: SweepTask, sources: SourceCache | None = None) -> SweepRow:
     """Build and run one scene of a sweep (with its HDF5 file if ``task.h5``); the row says how it went.
+
+    ``sources``: the scene sources opened so far by this sweep in this process (:class:`SourceCache`: a scene
+    file is read, and a Python one executed, once per process rather than once per run); None: open it now.
 
     A scene that cannot be built (an unknown key, a bad value), a static model that is not supported, or an
     analysis that raises gives a "failed" row; a run that stops early gives a "not converged" row with its
     message. Nothing here imports dask.
     """
     t0, c0 = time.perf_counter(), time.thread_time()
-    row = _run(task, t0)
+    row = _run(task, t0, sources if sources is not None else SourceCache())
+    row.total_time_s = time.perf_counter() - t0      # after the row is made and the run's scene and states freed
     row.cpu_time_s = time.thread_time() - c0
     return row
 
 
-def _run(task: SweepTask, t0: float) -> SweepRow:
+class SourceCache:
+    """The scene sources (:class:`flexbody.scenes.sources.SceneSource`) a sweep has opened in one process,
+    by scene name and, for a scene file, its modification time and size (a file edited during the sweep is
+    read again). Building a scene from its source is what every run does; opening the source (reading a
+    TOML file, executing a Python scene file, looking up a built-in) is done once per process: one cache per
+    :func:`run_serial` call, one per Dask worker (:mod:`flexbody.cluster`). A source that cannot be opened is
+    not kept (each run reports it)."""
+
+    def __init__(self) -> None:
+        self._sources: dict[tuple, object] = {}
+        self.opened = 0              # how many sources were opened (not found in the cache)
+
+    @staticmethod
+    def _key(scene: str) -> tuple:
+        try:
+            st = os.stat(scene)
+        except OSError:
+            return (scene, None)
+        return (scene, st.st_mtime_ns, st.st_size)
+
+    def get(self, scene: str):
+        """The source of ``scene`` (a built-in name or a scene file), opened now if it is not cached."""
+        from flexbody.scenes.sources import open_scene
+        key = self._key(scene)
+        source = self._sources.get(key)
+        if source is None:
+            source = open_scene(scene)
+            self.opened += 1
+            self._sources = {k: v for k, v in self._sources.items() if k[0] != scene}   # an older version
+            self._sources[key] = source
+        return source
+
+
+def _run(task: SweepTask, t0: float, sources: SourceCache) -> SweepRow:
     from flexbody.assembly import ModelError
     from flexbody.outputs.recording import OutputStopped, RunRecorder
     from flexbody.scenes.scene import run_scene
-    from flexbody.scenes.sources import SceneError, open_scene
+    from flexbody.scenes.sources import SceneError
     try:
-        scene = open_scene(task.scene).build(task.parameters)
+        scene = sources.get(task.scene).build(task.parameters)
         if scene.kind == "static":
             scene.model.check_static_support()
     except (SceneError, ModelError) as exc:
@@ -217,9 +303,10 @@ def run_serial(tasks: list[SweepTask], on_row: Callable[[SweepRow], None] | None
     """Run the tasks one after another in this process (no dask); Ctrl-C stops the sweep and marks the runs
     not finished "cancelled" (the finished rows are kept)."""
     rows: list[SweepRow] = []
+    sources = SourceCache()
     try:
         for task in tasks:
-            row = run_task(task)
+            row = run_task(task, sources)
             rows.append(row)
             if on_row is not None:
                 on_row(row)

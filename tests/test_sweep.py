@@ -241,3 +241,81 @@ def test_untrusted_dynamic_run_gives_exit_code_3(client, tmp_path):
     assert [(r["status"], r["converged"], r["trusted"]) for r in table] == [("ok", "True", "True"),
                                                                           ("untrusted", "True", "False")]
     assert "turns by 0.5 rad in a time step" in table[1]["message"]
+
+
+def test_rows_are_small_unless_details_are_asked_for():
+    """A task's row carries the run's full summary and history only with ``details`` (as the bench asks);
+    the table's numbers are the same either way."""
+    import pickle
+    from dataclasses import replace
+    task = make_tasks(SCENE, [{"nx": 2}], FIXED)[0]
+    small, full = run_task(task), run_task(replace(task, details=True))
+    assert small.summary == {} and small.history == {} and small.reference is None
+    assert full.summary["outputs"] == small.outputs and len(full.history["W_tip"]) == 3 and full.reference
+    assert small.as_dict() | {"total_time_s": 0, "cpu_time_s": 0, "wall_time_s": 0} == \
+        full.as_dict() | {"total_time_s": 0, "cpu_time_s": 0, "wall_time_s": 0}
+    assert len(pickle.dumps(small)) < len(pickle.dumps(full)) / 3
+    assert make_tasks(SCENE, [{}], details=True)[0].details and not make_tasks(SCENE, [{}])[0].details
+
+
+def test_source_cache_opens_a_scene_once_and_a_changed_file_again(tmp_path):
+    """The scene source is opened once per cache (a Python scene file executed once, not per run), and
+    again when the file changes; a scene that cannot be opened is reported by every run."""
+    from flexbody.sweep import SourceCache
+    scene = tmp_path / "counted.py"
+    scene.write_text("from flexbody.scenes.builtin import cantilever_end_moment\n"
+                     "def build(nx: int = 2, steps: int = 2):\n    return cantilever_end_moment(nx=nx, steps=steps)\n")
+    cache = SourceCache()
+    first = cache.get(str(scene))
+    assert cache.get(str(scene)) is first and cache.opened == 1
+    scene.write_text(scene.read_text() + "\n# edited\n")
+    os.utime(scene, ns=(os.stat(scene).st_atime_ns, os.stat(scene).st_mtime_ns + 10**9))
+    assert cache.get(str(scene)) is not first and cache.opened == 2
+    rows = [run_task(t, cache) for t in make_tasks(str(scene), grid_points({"nx": [2, 3]}))]
+    assert [r.status for r in rows] == ["ok", "ok"] and cache.opened == 2
+    missing = make_tasks(str(tmp_path / "missing.py"), [{}])[0]
+    assert run_task(missing, cache).status == "failed" and run_task(missing, cache).status == "failed"
+
+
+def test_longest_runs_first():
+    """The estimate orders the runs of one scene by mesh density times steps; ties keep the sweep order."""
+    from flexbody.cluster import longest_first
+    from flexbody.sweep import SourceCache, estimated_cost
+    cache = SourceCache()
+    tasks = make_tasks(SCENE, grid_points({"nx": [2, 8, 4], "steps": [3, 6]}))
+    assert [estimated_cost(t, cache) for t in tasks] == [6, 12, 24, 48, 12, 24]
+    assert [t.index for t in longest_first(tasks)] == [3, 2, 5, 1, 4, 0]
+    dynamic = make_tasks("spinning_plate", grid_points({"dt": [0.004, 0.001, 0.002], "omega": [5, 10]}),
+                         {"end_time": 0.2})
+    assert [t.index for t in longest_first(dynamic)] == [2, 3, 4, 5, 0, 1]
+    assert estimated_cost(make_tasks("no_such_scene", [{}])[0], cache) == 0.0
+
+
+def test_second_sweep_reuses_the_workers_warm_up_and_sources(client):
+    """A second sweep of the same scene on the same workers does not repeat the warm-up, and each worker
+    opened the scene's source once for all its runs."""
+    from flexbody.cluster import PLUGIN_NAME, run_distributed
+    tasks = make_tasks(SCENE, grid_points({"nx": [2, 3, 2, 3]}), {"steps": 2})
+    first = _by_index(run_distributed(client, tasks))
+    plugins = client.run(lambda dask_worker: id(dask_worker.plugins[PLUGIN_NAME]))
+    second = _by_index(run_distributed(client, tasks))
+    assert client.run(lambda dask_worker: id(dask_worker.plugins[PLUGIN_NAME])) == plugins
+    assert client.run(lambda dask_worker: dask_worker.plugins[PLUGIN_NAME].sources.opened) == \
+        {address: 1 for address in plugins}
+    assert all(first[i].outputs == second[i].outputs and first[i].status == "ok" for i in first)
+
+
+def test_local_cluster_runs_with_the_quiet_settings(client):
+    """The local cluster's scheduler gives each worker thread one run at a time and steals nothing; its
+    workers run without the profiler and with the slow health check and monitors (flexbody.cluster.WORKER_CONFIG),
+    also a worker that its nanny restarted (after the lost-worker test: it once came back with Dask's defaults)."""
+    from flexbody.cluster import WORKER_CONFIG
+    scheduler = client.run_on_scheduler(lambda dask_scheduler: (dask_scheduler.WORKER_SATURATION,
+                                                                "stealing" in dask_scheduler.extensions))
+    assert scheduler == (1.0, False)
+
+    def settings():
+        import dask
+        return {key: dask.config.get(key) for key in WORKER_CONFIG}
+
+    assert list(client.run(settings).values()) == [WORKER_CONFIG] * 2
