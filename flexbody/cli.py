@@ -240,7 +240,7 @@ def _progress_printer(quiet: bool, prefix: str = "", goal: float | None = None) 
 def _run_scene(scene, on_step=None, quiet: bool = False, prefix: str = "", started: float | None = None,
                restart=None):
     """``run_scene`` with the progress and compilation notices on stderr (none with ``quiet``)."""
-    from flexbody.scenes.scene import run_scene
+    from flexbody.scenes.runner import run_scene
     progress = _progress_printer(quiet, prefix, _progress_goal(scene))
     notify = None if progress is None else progress.notify
     extra = {} if restart is None else {"restart": restart}
@@ -841,7 +841,7 @@ def cmd_buckling(args) -> int:
     factors (the loads of the scene at load factor 1 times the factor); returns 0, or 2 if the load pattern
     has no positive critical factor (nothing buckles under it)."""
     from flexbody.buckling import linear_buckling
-    from flexbody.scenes.scene import warm_up_kernels
+    from flexbody.scenes.kernel_setup import warm_up_kernels
     t0 = time.perf_counter()
     count = 6 if getattr(args, "count", None) is None else args.count
     if isinstance(count, bool) or not isinstance(count, int) or count < 1:

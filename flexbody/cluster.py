@@ -80,7 +80,7 @@ class KernelWarmUp(WorkerPlugin):
         await asyncio.to_thread(self._warm_up)   # a first compilation takes minutes: not on the event loop
 
     def _warm_up(self) -> None:
-        from flexbody.scenes.scene import kernel_threads, warm_up_kernels
+        from flexbody.scenes.kernel_setup import kernel_threads, warm_up_kernels
         from flexbody.scenes.sources import open_scene
         t0 = time.perf_counter()
         try:

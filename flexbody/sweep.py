@@ -196,7 +196,7 @@ def run_task(task: SweepTask) -> SweepRow:
 def _run(task: SweepTask, t0: float) -> SweepRow:
     from flexbody.assembly import ModelError
     from flexbody.outputs.recording import OutputStopped, RunRecorder
-    from flexbody.scenes.scene import run_scene
+    from flexbody.scenes.runner import run_scene
     from flexbody.scenes.sources import SceneError, open_scene
     try:
         scene = open_scene(task.scene).build(task.parameters)

@@ -18,9 +18,12 @@ from flexbody.body import ShellBody
 from flexbody.constraints import Fix, Symmetry
 from flexbody.loads import NodalLoad, nodal_vectors_from_edges
 from flexbody.mesh import generators
-from flexbody.scenes.reference import read_reference_csv
-from flexbody.scenes.scene import (AngularVelocity, DynamicAnalysis, Output, RadialDisplacement, Reference, Scene,
-                                   StaticAnalysis, kernel_threads)
+from flexbody.scenes.analysis import DynamicAnalysis, StaticAnalysis
+from flexbody.scenes.kernel_setup import kernel_threads
+from flexbody.scenes.motions import hub_spin_up, nodal_fields, rigid_field
+from flexbody.scenes.reference import Reference, read_reference_csv
+from flexbody.scenes.scene import Scene
+from flexbody.scenes.tracked import AngularVelocity, Output, RadialDisplacement
 from flexbody.shell.material import ShellMaterial
 from integrators.newton import NewtonSettings
 
@@ -157,7 +160,6 @@ def hemisphere(n_meridian: int = 20, n_circ: int = 20, thickness: float = 0.04, 
 
 def _spin_velocities(nodes: np.ndarray, omega, center) -> dict:
     """The DynamicAnalysis keywords of the rigid spin omega x (x - center)."""
-    from flexbody.scenes.dynamic_run import rigid_field
     xdot, w = rigid_field(nodes, omega, center)
     return dict(initial_velocity=xdot, initial_angular_velocity=w)
 
@@ -243,7 +245,6 @@ def spinning_membrane(n_radial: int = 2, n_circ: int = 32, inner_radius: float =
         steady = 0.0
     else:
         from flexbody.dynamics import PrescribedMotion
-        from flexbody.scenes.dynamic_run import hub_spin_up
         kwargs = dict(prescribed=(PrescribedMotion(inner, hub_spin_up([0.0, 0.0, omega], ramp_time)),))
         steady = ramp_time
     outs = [RadialDisplacement(f"u_r_{name}", tuple(int(i) for i in nodes)) for name, nodes, _ in rings]
@@ -279,7 +280,6 @@ def spinning_sail(n_rings: int = 4, radius: float = 1.0, thickness: float = 0.01
     towards the corners). There is no analytic solution for the hexagon; compare with ``spinning_membrane``.
     """
     from flexbody.dynamics import PrescribedMotion
-    from flexbody.scenes.dynamic_run import hub_spin_up
     nu, rho = 0.3, 1000.0
     if not 0 < ramp_time < end_time:
         raise ValueError(f"ramp_time must lie in (0, end_time), got {ramp_time!r}")
@@ -418,7 +418,6 @@ def tumbling_plate(nx: int = 2, ny: int = 1, thickness: float = 0.01, omega: tup
     rigid body with the discrete inertia of the initial state (scipy DOP853), at every output time.
     """
     from flexbody.dynamics import DynamicModel
-    from flexbody.scenes.dynamic_run import nodal_fields
     mesh = generators.strip(1.0, 0.5, nx, ny)
     model = Model(ShellBody(mesh, ShellMaterial(1e9, 0.3, thickness, density=1000.0)))
     dyn = DynamicModel(model)

@@ -49,8 +49,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-from flexbody.scenes.scene import (AngularVelocity, DynamicAnalysis, Output, RadialDisplacement, Reference, Scene,
-                                   StaticAnalysis)
+from flexbody.scenes.analysis import DynamicAnalysis, StaticAnalysis
+from flexbody.scenes.reference import Reference
+from flexbody.scenes.scene import Scene
+from flexbody.scenes.tracked import AngularVelocity, Output, RadialDisplacement
 from flexbody.shell.element_reference import TYING_NAMES
 
 
@@ -597,7 +599,7 @@ def _hub_shape_nodes(hub: _Table, mesh, kind: str) -> np.ndarray:
     """The nodes within ``radius`` of the hub's axis, or inside ``polygon = {sides, circumradius, angle}``
     (vertex 0 at ``angle`` radians from the reference direction of the polar angle), both about the axis
     along ``angular_velocity`` (z if it is zero) through ``center``; boundary nodes included."""
-    from flexbody.scenes.dynamic_run import polar_coordinates
+    from flexbody.scenes.motions import polar_coordinates
     omega = hub.vector("angular_velocity")
     axis = omega if np.abs(omega).max() > 0 else np.array([0.0, 0.0, 1.0])
     center = hub.vector("center", [0.0, 0.0, 0.0])
@@ -626,7 +628,7 @@ def _hub_shape_nodes(hub: _Table, mesh, kind: str) -> np.ndarray:
 
 def _velocity_fields(it: _Table, positions: np.ndarray) -> np.ndarray:
     """The sum (n, 3) of the ``[[analysis.initial.velocity_field]]`` fields (zero without any)."""
-    from flexbody.scenes.dynamic_run import modal_velocity_field
+    from flexbody.scenes.motions import modal_velocity_field
     total = np.zeros_like(positions)
     for ft in it.tables("velocity_field"):
         radial = ft.raw("radial", "linear")
@@ -724,7 +726,7 @@ def _build_dynamic_analysis(t: _Table, body, hub_nodes: np.ndarray | None, load_
     ``load_functions``: the time functions of load groups 1, 2, ... (group 0 follows ``load_ramp_time``).
     """
     from flexbody.dynamics import PrescribedMotion
-    from flexbody.scenes.dynamic_run import hub_spin_up, rigid_field
+    from flexbody.scenes.motions import hub_spin_up, rigid_field
     from flexbody.time_functions import GroupFactors, Ramp, constant
     t.string("type", choices=("static", "dynamic"))
     dt, end = t.number("dt", positive=True), t.number("end_time", positive=True)
