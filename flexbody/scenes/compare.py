@@ -1,6 +1,7 @@
-"""A run against its reference: a static path at its converged steps (:func:`compare_with_reference`) and a
-motion at the reference's times (:func:`compare_in_time`). Each returns one dict per compared value, with the
-quantity, the value, the reference, ``rel_error`` and the ``measure`` used."""
+"""A run against its reference (:func:`compare`): a static path at its converged steps
+(:func:`compare_with_reference`) and a motion at the reference's times (:func:`compare_in_time`). Each
+returns one dict per compared value, with the quantity, the value, the reference, ``rel_error`` and the
+``measure`` used."""
 
 from __future__ import annotations
 
@@ -109,3 +110,12 @@ def compare_in_time(history: dict[str, list[float]], reference: Reference) -> li
                            "rel_error": abs(v - float(rv)) / scale,
                            "measure": "recorded" if recorded else "interpolated"})
     return errors
+
+
+def compare(history: dict[str, list[float]], reference: Reference) -> list[dict]:
+    """The errors of a run's history against its reference: along the path (:func:`compare_with_reference`)
+    for a static run's history (abscissa ``load_factor``), in time (:func:`compare_in_time`) for a dynamic
+    run's (abscissa ``time``)."""
+    if "load_factor" in history:
+        return compare_with_reference(history, reference)
+    return compare_in_time(history, reference)

@@ -1,7 +1,8 @@
 """Running a dynamic scene: generalized-alpha time integration with outputs, energies and momenta per step.
 
 Imported only when a scene with a :class:`flexbody.scenes.analysis.DynamicAnalysis` runs (it builds the mass:
-:class:`flexbody.dynamics.DynamicModel`); :func:`flexbody.scenes.runner.run_scene` calls :func:`run_dynamic`.
+:class:`flexbody.dynamics.DynamicModel`); :func:`flexbody.scenes.runner.run_scene` drives its
+:class:`DynamicRun`.
 The summary (:class:`flexbody.scenes.summary.DynamicRunSummary`) carries the energy and momentum balance and
 the checks of a completed run.
 
@@ -22,7 +23,6 @@ import numpy as np
 
 from flexbody.scenes.analysis import DynamicAnalysis, RestartPoint
 from flexbody.scenes.compare import compare_in_time
-from flexbody.scenes.kernel_setup import CompileNotice, kernel_threads, warm_up_kernels
 from flexbody.scenes.motions import (RADIAL_SHAPES, hub_spin_up, modal_velocity_field, nodal_fields,
                                      polar_coordinates, radial_shape, rigid_field, spin_up_angle)
 from flexbody.scenes.summary import (ENERGY_KEYS, MAX_ENERGY_DRIFT, MAX_MOMENTUM_DRIFT,
@@ -31,7 +31,7 @@ from flexbody.scenes.summary import (ENERGY_KEYS, MAX_ENERGY_DRIFT, MAX_MOMENTUM
 if TYPE_CHECKING:
     from flexbody.scenes.scene import Scene
 
-__all__ = ["run_dynamic", "initial_conditions", "initial_velocity", "rotation_rate",
+__all__ = ["DynamicRun", "initial_conditions", "initial_velocity", "rotation_rate",
            # kept under this import path (they live in flexbody.scenes.motions and flexbody.scenes.summary)
            "RADIAL_SHAPES", "hub_spin_up", "modal_velocity_field", "nodal_fields", "polar_coordinates", "radial_shape",
            "rigid_field", "spin_up_angle", "compare_in_time", "DynamicRunSummary", "ENERGY_KEYS", "MAX_ENERGY_DRIFT",
@@ -120,41 +120,49 @@ def _steps_taken(result, a: DynamicAnalysis) -> int:
     return int(round(result.time / (a.end_time / a.n_steps)))
 
 
-def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callable | None = None,
-                notify: Callable[[CompileNotice], None] | None = None,
-                started: float | None = None, restart: RestartPoint | None = None) -> DynamicRunSummary:
-    """Integrate a dynamic scene; record outputs, energies and momenta; compare with the reference.
+class DynamicRun:
+    """A dynamic scene's run (the dynamic half of :func:`flexbody.scenes.runner.run_scene`): generalized-alpha
+    time integration recording the outputs, energies and momenta.
 
-    ``on_step(record, state, history)`` is called for the initial state (record step 0, time 0) and for
-    every recorded step; ``progress(record)`` for every recorded step; ``notify`` and ``started`` as in
-    :func:`flexbody.scenes.runner.run_scene`; ``restart`` (:class:`flexbody.scenes.analysis.RestartPoint`)
-    continues a saved run from its step (the history then starts there). A run that stops early (a step that does not converge) also
-    records its last converged state when that is not an output step (``output_every`` > 1): the files, the
-    history and the summary then all end at that instant.
+    Made before the clock of the solve starts (it builds the mass, :class:`flexbody.dynamics.DynamicModel`, and
+    the initial conditions: set-up time). ``on_step(record, state, history)`` is called for the initial state
+    (record step 0, time 0) and for every recorded step; ``progress(record)`` for every recorded step;
+    ``restart`` (:class:`flexbody.scenes.analysis.RestartPoint`) continues a saved run from its step (the
+    history then starts there). A run that stops early (a step that does not converge) also records its last
+    converged state when that is not an output step (``output_every`` > 1): the files, the history and the
+    summary then all end at that instant.
     """
-    started = time.perf_counter() if started is None else started
-    from flexbody.dynamics import DynamicModel
-    from integrators.generalized_alpha import generalized_alpha
 
-    model, a = scene.model, scene.analysis
-    dyn = DynamicModel(model, gravity=a.gravity, load_factor=a.load_factor, prescribed=list(a.prescribed),
-                       point_masses=list(a.point_masses), damping=a.damping, mass=a.mass)
-    state, v0 = initial_conditions(dyn, a)
-    history: dict[str, list[float]] = {"time": [], **{o.name: [] for o in scene.outputs}}
-    energies: dict[str, list] = {k: [] for k in ("time", *ENERGY_KEYS, "linear_momentum", "angular_momentum")}
-    h = a.end_time / a.n_steps
-    turn = [0.0, 0.0]                        # the largest rotation per step so far, and its time
+    def __init__(self, scene: Scene, on_step: Callable | None = None, progress: Callable | None = None,
+                 restart: RestartPoint | None = None) -> None:
+        from flexbody.dynamics import DynamicModel
 
-    def record(rec, q, v, initial: bool = False) -> None:
+        a = scene.analysis
+        self.scene, self.analysis, self.restart = scene, a, restart
+        self.on_step, self.progress = on_step, progress
+        self.threads = a.threads
+        self.dyn = DynamicModel(scene.model, gravity=a.gravity, load_factor=a.load_factor,
+                                prescribed=list(a.prescribed), point_masses=list(a.point_masses), damping=a.damping,
+                                mass=a.mass)
+        self.state, self.v0 = initial_conditions(self.dyn, a)
+        self.history: dict[str, list[float]] = {"time": [], **{o.name: [] for o in scene.outputs}}
+        self.energies: dict[str, list] = {k: [] for k in ("time", *ENERGY_KEYS, "linear_momentum",
+                                                          "angular_momentum")}
+        self.h = a.end_time / a.n_steps
+        self.turn = (0.0, 0.0)                   # the largest rotation per step so far, and its time
+
+    def record(self, rec, q, v, initial: bool = False) -> None:
+        """Record a step: the nodal velocity fields for the output files, outputs, energies, momenta."""
+        dyn, history, energies = self.dyn, self.history, self.energies
         if rec.motion is not None:               # nodal velocities and accelerations, for the output files
             rec.motion["velocity"], rec.motion["angular_velocity"] = nodal_fields(dyn, q, rec.motion["v"])
             rec.motion["acceleration"], rec.motion["angular_acceleration"] = nodal_fields(dyn, q, rec.motion["vdot"])
         history["time"].append(rec.time)
-        rate = rotation_rate(dyn, q, v) * (rec.h or h)      # the step that led here (adaptive: varies)
-        if rate > turn[0]:
-            turn[:] = [rate, float(rec.time)]
-        for out in scene.outputs:
-            history[out.name].append(_output_value(out, model, dyn, q, v))
+        rate = rotation_rate(dyn, q, v) * (rec.h or self.h)      # the step that led here (adaptive: varies)
+        if rate > self.turn[0]:
+            self.turn = (rate, float(rec.time))
+        for out in self.scene.outputs:
+            history[out.name].append(_output_value(out, self.scene.model, dyn, q, v))
         energies["time"].append(rec.time)
         for key, value in (("kinetic", rec.kinetic_energy), ("strain", rec.strain_energy),
                            ("gravity", rec.potential_energy), ("total", rec.total_energy),
@@ -162,42 +170,48 @@ def run_dynamic(scene: Scene, on_step: Callable | None = None, progress: Callabl
             energies[key].append(float(value))
         energies["linear_momentum"].append(np.asarray(rec.linear_momentum, float).tolist())
         energies["angular_momentum"].append(np.asarray(rec.angular_momentum, float).tolist())
-        if on_step is not None:
-            on_step(rec, q, history)
-        if progress is not None and not initial:
-            progress(rec)
+        if self.on_step is not None:
+            self.on_step(rec, q, history)
+        if self.progress is not None and not initial:
+            self.progress(rec)
 
-    with kernel_threads(a.threads, model.body.mesh.n_elements):
-        setup = time.perf_counter() - started
-        compile_time = warm_up_kernels(model, notify)  # numba compilation is not run time
-        t0 = time.perf_counter()
+    def solve(self, t0: float):
+        """Integrate from t = 0 (or the restart step) to the end time; ``t0``: when the solve's clock started.
+        Returns the :class:`integrators.generalized_alpha.DynamicResult`."""
+        from integrators.generalized_alpha import generalized_alpha
+
+        dyn, a, restart, state, v0 = self.dyn, self.analysis, self.restart, self.state, self.v0
         if restart is None:
             vdot0 = dyn.initial_acceleration(state, 0.0, v0)
             first = _state_record(dyn, 0, 0.0, state, v0, 0.0)
             first.motion = {"v": v0, "vdot": vdot0, "a": vdot0}
-            record(first, state, v0, initial=True)
+            self.record(first, state, v0, initial=True)
             result = generalized_alpha(dyn, a.end_time, a.time_step, state=state, velocity=v0,
-                                       settings=a.alpha_settings(), on_step=record, record_every=a.output_every)
+                                       settings=a.alpha_settings(), on_step=self.record, record_every=a.output_every)
         else:                                  # continue a saved run (flexbody.outputs.restart)
-            h = a.end_time / a.n_steps
+            h = self.h
             if not 0 <= restart.step < a.n_steps:
                 raise ValueError(f"restart step {restart.step} is not before the last step {a.n_steps}")
             state, v0 = restart.state, restart.v
             first = _state_record(dyn, restart.step, restart.step * h, state, v0, 0.0, restart.dissipated_energy)
             first.motion = {"v": v0, "vdot": restart.vdot, "a": restart.a}
-            record(first, state, v0, initial=True)
+            self.record(first, state, v0, initial=True)
             result = generalized_alpha(dyn, a.end_time, h, state=state, velocity=v0, settings=a.alpha_settings(),
-                                       on_step=record, record_every=a.output_every, t_start=restart.step * h,
+                                       on_step=self.record, record_every=a.output_every, t_start=restart.step * h,
                                        acceleration=restart.vdot, pseudo_acceleration=restart.a,
                                        first_step=restart.step, dissipated_energy=restart.dissipated_energy)
-        if result.time > history["time"][-1]:  # stopped between two output steps: record where it stopped
+        if result.time > self.history["time"][-1]:  # stopped between two output steps: record where it stopped
             last = _state_record(dyn, _steps_taken(result, a), result.time, result.state, result.velocity,
                                  time.perf_counter() - t0, result.dissipated_energy)
             last.motion = {"v": result.velocity, "vdot": result.acceleration, "a": result.pseudo_acceleration}
             result.records.append(last)
-            record(last, result.state, result.velocity)
-        wall = time.perf_counter() - t0
-    errors = compare_in_time(history, scene.reference) if scene.reference else []
-    return DynamicRunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, a, history, energies,
-                             errors, wall, dyn.inertia.total_mass, _is_isolated(scene), _is_conservative(scene),
-                             setup, compile_time, tuple(turn), float(np.linalg.norm(np.ptp(model.body.mesh.nodes, axis=0))))
+            self.record(last, result.state, result.velocity)
+        return result
+
+    def summary(self, result, errors: list[dict], wall: float, setup: float, compile_time: float) -> DynamicRunSummary:
+        scene, model = self.scene, self.scene.model
+        size = float(np.linalg.norm(np.ptp(model.body.mesh.nodes, axis=0)))
+        return DynamicRunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, self.history, errors,
+                                 wall, setup, compile_time, analysis=self.analysis, energies=self.energies,
+                                 total_mass=self.dyn.inertia.total_mass, isolated=_is_isolated(scene),
+                                 conservative=_is_conservative(scene), rotation_per_step=self.turn, size=size)

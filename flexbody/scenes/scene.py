@@ -16,15 +16,16 @@ from dataclasses import dataclass, field
 
 from flexbody.assembly import Model
 from flexbody.scenes.analysis import DynamicAnalysis, RestartPoint, StaticAnalysis
-from flexbody.scenes.compare import compare_with_reference, nearest_on_polyline
+from flexbody.scenes.compare import compare, compare_with_reference, nearest_on_polyline
 from flexbody.scenes.kernel_setup import CompileNotice, kernel_threads, warm_up_kernels
 from flexbody.scenes.reference import Reference
 from flexbody.scenes.runner import run_scene
-from flexbody.scenes.summary import RunSummary, stability_summary, timings
+from flexbody.scenes.summary import DynamicRunSummary, RunSummary, StaticRunSummary, stability_summary, timings
 from flexbody.scenes.tracked import AngularVelocity, Output, RadialDisplacement, check_outputs
 
 __all__ = ["Scene", "Output", "RadialDisplacement", "AngularVelocity", "Reference", "StaticAnalysis",
-           "DynamicAnalysis", "RestartPoint", "RunSummary", "run_scene", "compare_with_reference",
+           "DynamicAnalysis", "RestartPoint", "RunSummary", "StaticRunSummary", "DynamicRunSummary", "run_scene",
+           "compare", "compare_with_reference",
            "nearest_on_polyline", "CompileNotice", "warm_up_kernels", "kernel_threads", "stability_summary",
            "timings"]
 

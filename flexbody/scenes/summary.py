@@ -1,4 +1,5 @@
-"""What a run reports: :class:`RunSummary` (a static path) and :class:`DynamicRunSummary` (a motion in time).
+"""What a run reports: :class:`RunSummary`, as :class:`StaticRunSummary` (a static path) or
+:class:`DynamicRunSummary` (a motion in time).
 
 Both carry the steps, Newton iterations, tangent updates, factorizations, wall time, outputs and errors
 against the reference; a dynamic run also the energy and momentum balance:
@@ -21,7 +22,9 @@ which ``flexbody run`` reports with exit code 3.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
@@ -47,16 +50,35 @@ RESOLVED_MOTION = 1e3
 
 
 @dataclass
-class RunSummary:
+class RunSummary(ABC):
+    """What every run reports, static or dynamic (:func:`flexbody.scenes.runner.run_scene` returns a
+    :class:`StaticRunSummary` or a :class:`DynamicRunSummary`, both of this type).
+
+    Attributes
+    ----------
+    scene, dofs, elements : the scene's name and size
+    result : the solver's result (:class:`integrators.static.StaticResult` or
+        :class:`integrators.generalized_alpha.DynamicResult`)
+    history : the abscissa (``load_factor`` or ``time``) and every tracked output, per recorded step
+    errors : the errors against the scene's reference (:func:`flexbody.scenes.compare.compare`)
+    wall_time_s : the solve (after set-up and compilation)
+    setup_time_s : building the scene (if the caller timed it) and the run's set-up (a dynamic run's mass)
+    compile_time_s : compiling the kernels, or loading them from numba's cache
+    """
+
+    kind: ClassVar[str] = ""
+    #: the history's abscissa
+    abscissa: ClassVar[str] = ""
+
     scene: str
     dofs: int
     elements: int
-    result: StaticResult
-    history: dict[str, list[float]]          # load_factor and every output, per converged step
+    result: object
+    history: dict[str, list[float]]
     errors: list[dict]
-    wall_time_s: float                       # the solve (after set-up and compilation)
-    setup_time_s: float = 0.0                # building the scene (if the caller timed it) and the run's set-up
-    compile_time_s: float = 0.0              # compiling the kernels, or loading them from numba's cache
+    wall_time_s: float
+    setup_time_s: float = 0.0
+    compile_time_s: float = 0.0
 
     @property
     def max_rel_error(self) -> float:
@@ -64,8 +86,25 @@ class RunSummary:
 
     @property
     def warnings(self) -> list[str]:
-        """Why a completed run is not to be trusted (a dynamic run's checks; none for a static path)."""
+        """Why a completed run is not to be trusted (empty if it is)."""
         return []
+
+    def final_outputs(self) -> dict[str, float]:
+        """Every tracked output at the last recorded step."""
+        return {k: v[-1] for k, v in self.history.items() if k != self.abscissa and v}
+
+    @abstractmethod
+    def as_dict(self) -> dict:
+        """The summary as JSON-able data (``flexbody run --json``, the bench report, sweeps)."""
+
+
+@dataclass
+class StaticRunSummary(RunSummary):
+    """A static path's summary (``result``: :class:`integrators.static.StaticResult`; ``history``:
+    ``load_factor`` and every output per converged step), with the path's stability."""
+
+    kind: ClassVar[str] = "static"
+    abscissa: ClassVar[str] = "load_factor"
 
     def as_dict(self) -> dict:
         st = self.result.stats
@@ -75,7 +114,7 @@ class RunSummary:
             "tangent_updates": st.tangent_updates, "factorizations": st.factorizations,
             "newton_iteration": st.iteration, "wall_time_s": self.wall_time_s, "converged": self.result.converged,
             "message": self.result.message, "load_factor": self.result.load_factor,
-            "outputs": {k: v[-1] for k, v in self.history.items() if k != "load_factor" and v},
+            "outputs": self.final_outputs(),
             "errors": self.errors, "max_rel_error": self.max_rel_error,
             **timings(self),
             "history": {k: [float(x) for x in v] for k, v in self.history.items()}, "warnings": self.warnings,
@@ -98,12 +137,12 @@ def timings(summary) -> dict[str, float]:
             "solve_time_s": summary.wall_time_s}
 
 
-@dataclass
-class DynamicRunSummary:
-    """The outcome of a dynamic scene run.
+@dataclass(kw_only=True)
+class DynamicRunSummary(RunSummary):
+    """The outcome of a dynamic scene run (``result``: :class:`integrators.generalized_alpha.DynamicResult`).
 
-    Attributes
-    ----------
+    Attributes (besides :class:`RunSummary`'s)
+    ------------------------------------------
     history : ``time`` and every tracked output at t = 0 and every recorded step
     energies : ``time``, kinetic, strain, gravity and total energy, ``linear_momentum`` and
         ``angular_momentum`` (lists of 3-vectors) at the same instants
@@ -115,20 +154,14 @@ class DynamicRunSummary:
     size : the diagonal of the body's bounding box in the reference configuration
     """
 
-    scene: str
-    dofs: int
-    elements: int
-    result: object                          # integrators.generalized_alpha.DynamicResult
+    kind: ClassVar[str] = "dynamic"
+    abscissa: ClassVar[str] = "time"
+
     analysis: DynamicAnalysis
-    history: dict[str, list[float]]
     energies: dict[str, list]
-    errors: list[dict]
-    wall_time_s: float
     total_mass: float
     isolated: bool
     conservative: bool
-    setup_time_s: float = 0.0               # building the scene (if the caller timed it), the mass, ...
-    compile_time_s: float = 0.0             # compiling the kernels, or loading them from numba's cache
     rotation_per_step: tuple[float, float] = (0.0, 0.0)
     size: float = 0.0
 
@@ -224,7 +257,7 @@ class DynamicRunSummary:
             "end_time": a.end_time, "time_step": a.end_time / a.n_steps, "rho_inf": a.rho_inf, "policy": a.policy,
             "time_steps": self.step_summary(),
             "mass": a.mass,
-            "outputs": {k: v[-1] for k, v in self.history.items() if k != "time" and v},
+            "outputs": self.final_outputs(),
             "errors": self.errors, "max_rel_error": self.max_rel_error,
             "energy": self.energy_summary(), "momentum": self.momentum_summary(),
             "energy_history": {k: list(map(float, self.energies[k])) for k in ("time", *ENERGY_KEYS)},
