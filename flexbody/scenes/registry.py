@@ -24,8 +24,9 @@ class BuiltinScene:
     name : the scene's name, also the name of its builder function (``build(**parameters) -> Scene``)
     kind : "static" or "dynamic"
     density : the mesh-density parameters of the builder (``flexbody bench`` refines them; report labels)
-    bench_meshes : the default mesh sequence of ``flexbody bench``, kept small (the five static scenes' take
-        about two minutes); empty: a dynamic scene is benched on the time steps dt, dt/2, dt/4 instead
+    bench_meshes : the default mesh sequence of ``flexbody bench``, kept small (the five static scenes'
+        sequences take about two minutes); empty: a dynamic scene is benched on the time steps dt, dt/2,
+        dt/4 instead
     exudyn_models : the exudyn reference models of :mod:`flexbody.adapters.exudyn`, the default first (empty:
         none)
     exudyn_mesh : the two builder parameters that give the element counts of an exudyn plate model
