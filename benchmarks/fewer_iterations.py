@@ -32,9 +32,9 @@ import time
 
 import numpy as np
 
-import flexbody.scenes.scene as scene_module
+import flexbody.scenes.runner as runner_module
 from flexbody.scenes import build, run_scene
-from flexbody.scenes.scene import compare_with_reference
+from flexbody.scenes.compare import compare_with_reference
 from integrators.static import load_control
 
 DEFAULT = ["slit_annular_plate", "hemisphere", "pullout_cylinder", "cantilever_end_shear", "cantilever_end_moment"]
@@ -55,15 +55,15 @@ def run(name: str, variant: str) -> dict:
     newton = dataclasses.replace(scene.analysis.newton, **newton_changes)
     scene.analysis = dataclasses.replace(scene.analysis, newton=newton)
     # run_scene calls load_control with the scene's settings only: pass the path-following options through
-    original = scene_module.load_control
-    scene_module.load_control = functools.partial(load_control, **load_control_kwargs)
+    original = runner_module.load_control
+    runner_module.load_control = functools.partial(load_control, **load_control_kwargs)
     try:
         scene.model.warm_up()
         cpu = time.process_time()
         summary = run_scene(scene)
         cpu = time.process_time() - cpu
     finally:
-        scene_module.load_control = original
+        runner_module.load_control = original
     st = summary.result.stats
     return dict(summary=summary, steps=len(summary.result.records), iterations=st.iterations,
                 tangents=st.tangent_updates, factorizations=st.factorizations, wall=summary.wall_time_s, cpu=cpu,

@@ -36,24 +36,20 @@ import time
 
 DEFAULT_SCENE = "cantilever_end_moment"
 
-#: the default mesh sequences of ``flexbody bench`` for the built-in scenes (kept small: all five take
-#: about two minutes)
-BENCH_MESHES: dict[str, list[dict]] = {
-    "cantilever_end_moment": [dict(nx=4), dict(nx=8), dict(nx=16)],
-    "cantilever_end_shear": [dict(nx=4), dict(nx=8), dict(nx=16)],
-    "slit_annular_plate": [dict(n_radial=3, n_circ=9), dict(n_radial=5, n_circ=15)],
-    "pullout_cylinder": [dict(n_circ=6, n_axial=4), dict(n_circ=8, n_axial=6), dict(n_circ=12, n_axial=8)],
-    "hemisphere": [dict(n_meridian=8, n_circ=8), dict(n_meridian=12, n_circ=12)],
-}
-
-
 #: how many time steps a bench of a dynamic scene runs: dt, dt/2, dt/4 (dt: the scene's, or --set dt=...)
 BENCH_TIME_STEPS = 3
 
 
 def _default_bench_scenes() -> list[str]:
-    from flexbody.scenes.builtin import DYNAMIC
-    return list(BENCH_MESHES) + list(DYNAMIC)
+    from flexbody.scenes.registry import bench_scenes
+    return list(bench_scenes())
+
+
+def _bench_meshes(source) -> list[dict]:
+    """A built-in scene's default mesh sequence of ``flexbody bench`` (flexbody.scenes.registry), else []."""
+    from flexbody.scenes.registry import SCENES
+    entry = SCENES.get(source.name) if source.kind == "builtin" else None
+    return [dict(mesh) for mesh in entry.bench_meshes] if entry is not None else []
 
 
 class CliError(Exception):
@@ -240,7 +236,7 @@ def _progress_printer(quiet: bool, prefix: str = "", goal: float | None = None) 
 def _run_scene(scene, on_step=None, quiet: bool = False, prefix: str = "", started: float | None = None,
                restart=None):
     """``run_scene`` with the progress and compilation notices on stderr (none with ``quiet``)."""
-    from flexbody.scenes.scene import run_scene
+    from flexbody.scenes.runner import run_scene
     progress = _progress_printer(quiet, prefix, _progress_goal(scene))
     notify = None if progress is None else progress.notify
     extra = {} if restart is None else {"restart": restart}
@@ -253,10 +249,9 @@ def _run_scene(scene, on_step=None, quiet: bool = False, prefix: str = "", start
 
 def cmd_list(args) -> int:
     """``flexbody list``: one line per built-in scene."""
-    from flexbody.scenes.builtin import BUILTIN
-    for name, builder in BUILTIN.items():
-        doc = (builder.__doc__ or "").strip().splitlines()[0]
-        print(f"{name:24s} {doc}")
+    from flexbody.scenes.registry import SCENES
+    for name, entry in SCENES.items():
+        print(f"{name:24s} {entry.summary}")
     return 0
 
 
@@ -282,11 +277,11 @@ def _parameter_unit(key: str) -> str:
 def show_lines(source, scene) -> list[str]:
     """The text of ``flexbody show``: the scene, its parameters with defaults and units, its reference."""
     import inspect
-    from flexbody.scenes.builtin import BUILTIN
+    from flexbody.scenes.registry import builtin_scene
     model = scene.model
     lines = [f"scene            {scene.name} ({source.kind})", f"models           {scene.description}"]
     if source.kind == "builtin":
-        doc = (BUILTIN[source.name].__doc__ or "").strip().splitlines()[0]
+        doc = builtin_scene(source.name).summary
         if doc and doc != scene.description:
             lines.append(f"                 {doc}")
     lines.append(f"mesh             {model.body.mesh.n_nodes} nodes, {model.body.mesh.n_elements} elements "
@@ -301,7 +296,7 @@ def show_lines(source, scene) -> list[str]:
                      if hasattr(a, "end_time") else "analysis         dynamic")
     defaults = {}
     if source.kind in ("builtin", "python"):
-        func = BUILTIN[source.name] if source.kind == "builtin" else None
+        func = builtin_scene(source.name).builder if source.kind == "builtin" else None
         if func is not None:
             defaults = {k: p.default for k, p in inspect.signature(func).parameters.items()
                         if p.default is not inspect.Parameter.empty}
@@ -561,8 +556,8 @@ def _mesh_sequence(source, refine: list[dict], scene=None) -> list[dict]:
     dt/4; else the scene's density parameters at 1x and 2x; else the scene as it is."""
     if refine:
         return refine
-    if source.kind == "builtin" and source.name in BENCH_MESHES:
-        return BENCH_MESHES[source.name]
+    if _bench_meshes(source):
+        return _bench_meshes(source)
     if scene is not None and scene.kind == "dynamic" and (source.keys is None or "dt" in source.keys):
         dt = scene.analysis.time_step
         return [dict(dt=dt / 2**k) for k in range(BENCH_TIME_STEPS)]
@@ -592,7 +587,7 @@ def _bench_one(source, params: dict, label: str, quiet: bool):
 
 def _bench_plan(source, common: dict, refine: list[dict]) -> list[dict]:
     """The runs of one scene (:func:`_mesh_sequence`), its first run's scene built to report a bad key now."""
-    needs_scene = not refine and not (source.kind == "builtin" and source.name in BENCH_MESHES)
+    needs_scene = not refine and not _bench_meshes(source)
     scene = _build(source, common) if needs_scene else None
     meshes = _mesh_sequence(source, refine, scene)
     _build(source, {**common, **meshes[0]})
@@ -842,7 +837,7 @@ def cmd_buckling(args) -> int:
     factors (the loads of the scene at load factor 1 times the factor); returns 0, or 2 if the load pattern
     has no positive critical factor (nothing buckles under it)."""
     from flexbody.buckling import linear_buckling
-    from flexbody.scenes.scene import warm_up_kernels
+    from flexbody.scenes.kernel_setup import warm_up_kernels
     t0 = time.perf_counter()
     count = 6 if getattr(args, "count", None) is None else args.count
     if isinstance(count, bool) or not isinstance(count, int) or count < 1:
@@ -1282,8 +1277,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.set_defaults(func=cmd_run)
 
     bench = sub.add_parser("bench", help="run scenes on a sequence of meshes; write report.md and plots")
-    bench.add_argument("scenes", nargs="*", help=f"scenes (default: {', '.join(BENCH_MESHES)} and the dynamic "
-                       "scenes, on time steps dt, dt/2, dt/4)")
+    bench.add_argument("scenes", nargs="*", help="scenes (default: the built-in scenes, the static ones on their "
+                       "bench meshes, the dynamic ones on time steps dt, dt/2, dt/4)")
     bench.add_argument("--refine", action="append", metavar="KEY=V1,V2,...",
                        help="the mesh sequence, e.g. --refine nx=4,8,16 (repeat for more keys, equal lengths)")
     bench.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a parameter in every run")

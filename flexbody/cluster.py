@@ -102,7 +102,7 @@ class KernelWarmUp(WorkerPlugin):
         await asyncio.to_thread(self._warm_up)   # a first compilation takes minutes: not on the event loop
 
     def _warm_up(self) -> None:
-        from flexbody.scenes.scene import kernel_threads, warm_up_kernels
+        from flexbody.scenes.kernel_setup import kernel_threads, warm_up_kernels
         t0 = time.perf_counter()
         try:
             scene = self.sources.get(self.scene).build(self.parameters)

@@ -282,7 +282,7 @@ class SourceCache:
 def _run(task: SweepTask, t0: float, sources: SourceCache) -> SweepRow:
     from flexbody.assembly import ModelError
     from flexbody.outputs.recording import OutputStopped, RunRecorder
-    from flexbody.scenes.scene import run_scene
+    from flexbody.scenes.runner import run_scene
     from flexbody.scenes.sources import SceneError
     try:
         scene = sources.get(task.scene).build(task.parameters)

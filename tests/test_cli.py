@@ -148,8 +148,8 @@ def test_progress_goes_to_stderr_and_quiet_silences_it(capsys):
 ])
 def test_bad_output_path_is_one_line_before_the_run(tmp_path, monkeypatch, option, path, message):
     monkeypatch.chdir(tmp_path)
-    import flexbody.scenes.scene as scene_module
-    monkeypatch.setattr(scene_module, "run_scene", lambda *a, **k: pytest.fail("the run started"))
+    import flexbody.scenes.runner as runner_module
+    monkeypatch.setattr(runner_module, "run_scene", lambda *a, **k: pytest.fail("the run started"))
     with pytest.raises(SystemExit) as exc:
         main(["run", "cantilever_end_shear", *SMALL, option, path])
     assert message in str(exc.value) and "\n" not in str(exc.value)

@@ -43,7 +43,7 @@ def read_restart(spec: str, scene):
     file without restart data, a step not saved)."""
     from flexbody.body import ShellState
     from flexbody.outputs.hdf5 import read_hdf5
-    from flexbody.scenes.scene import RestartPoint
+    from flexbody.scenes.analysis import RestartPoint
     path, step = parse_restart(spec)
     if not os.path.isfile(path):
         raise RestartError(f"--restart file {path!r} does not exist")

@@ -1,12 +1,28 @@
-"""Reference solutions: the CSVs shipped with flexbody (flexbody/reference/*.csv, sources in their '#'
-lines) and a user's own reference CSV (the same format) for a scene file."""
+"""Reference solutions: the :class:`Reference` a scene's run is compared with, the CSVs shipped with flexbody
+(flexbody/reference/*.csv, sources in their '#' lines) and a user's own reference CSV (the same format) for a
+scene file."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
+
+
+@dataclass(frozen=True)
+class Reference:
+    """Reference values of some outputs at load factors (static scenes) or at times (dynamic scenes)."""
+
+    load_factors: np.ndarray
+    values: dict[str, np.ndarray]
+    source: str = ""
+
+    @property
+    def times(self) -> np.ndarray:
+        """The abscissae of a dynamic scene's reference (the same array as ``load_factors``)."""
+        return self.load_factors
 
 
 def parse_csv(text: str, source: str) -> tuple[dict[str, np.ndarray], list[str]]:

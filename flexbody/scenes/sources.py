@@ -12,6 +12,7 @@ import os
 from pathlib import Path
 from typing import Any, Callable
 
+from flexbody.scenes import registry
 from flexbody.scenes.scene import Scene
 from flexbody.scenes.toml_scene import MAX_STEPS, SceneError, density_parameters, load_toml_scene
 
@@ -61,25 +62,28 @@ class SceneSource:
 
 def scene_kind(name: str) -> str:
     """"builtin", "python" or "toml" for a scene argument (by suffix for files)."""
-    from flexbody.scenes.builtin import BUILTIN
-    if name in BUILTIN:
+    if name in registry.SCENES:
         return "builtin"
     suffix = Path(name).suffix.lower()
     if suffix == ".py":
         return "python"
     if suffix == ".toml":
         return "toml"
-    raise SceneError(f"unknown scene {name!r}; built-in scenes: {', '.join(BUILTIN)} "
+    raise SceneError(f"unknown scene {name!r}; built-in scenes: {', '.join(registry.SCENES)} "
                      "(or give a path to a .toml or .py scene file)")
 
 
-def _function_source(name: str, kind: str, func: Callable) -> SceneSource:
+def _function_source(name: str, kind: str, func: Callable, density_keys: tuple[str, ...] | None = None) -> SceneSource:
+    """A builder function's source; its density parameters are ``density_keys`` (a built-in scene's, from the
+    registry) or, for a user's ``build``, the integer keywords named ``n...`` (except ``n_sides``)."""
     params = inspect.signature(func).parameters
     any_key = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values())
     keys = None if any_key else [k for k, p in params.items()
                                  if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
-    density = {k: p.default for k, p in params.items() if k.startswith("n")
-               and isinstance(p.default, int) and not isinstance(p.default, bool) and k != "n_sides"}
+    if density_keys is None:
+        density_keys = tuple(k for k, p in params.items() if k.startswith("n") and isinstance(p.default, int)
+                             and not isinstance(p.default, bool) and k != "n_sides")
+    density = {k: params[k].default for k in density_keys}
     return SceneSource(name, kind, lambda overrides: func(**overrides), keys, density)
 
 
@@ -123,8 +127,8 @@ def open_scene(name: str) -> SceneSource:
     """The :class:`SceneSource` of a built-in scene name or a ``.py`` / ``.toml`` scene file."""
     kind = scene_kind(name)
     if kind == "builtin":
-        from flexbody.scenes.builtin import BUILTIN
-        return _function_source(name, kind, BUILTIN[name])
+        entry = registry.builtin_scene(name)
+        return _function_source(name, kind, entry.builder, entry.density)
     if kind == "python":
         return _function_source(name, kind, _python_builder(name))
     density = density_parameters(name)  # also reports a missing or malformed file now
