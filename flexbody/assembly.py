@@ -89,6 +89,7 @@ class Model:
         self._collect_loads()
         conn = self.body.mesh.elements
         self._dof6 = (6 * conn[:, :, None] + np.arange(6)).reshape(len(conn), 36)
+        self._dof6_flat = self._dof6.ravel()
         size = float(np.ptp(self.body.mesh.nodes, axis=0).max()) or 1.0
         scale6 = np.tile([size, size, size, 1.0, 1.0, 1.0], n)
         self.dof_scale = scale6[self.free]  # translations in units of the model size, rotations in rad
@@ -325,26 +326,41 @@ class Model:
         else:
             fe, Ke = self.body.element_forces(state, want_tangent)
         self.counters.residuals += 1
-        bad = np.flatnonzero(~np.all(np.isfinite(fe), axis=1))
-        if bad.size == 0 and want_tangent:
-            bad = np.flatnonzero(~np.all(np.isfinite(Ke.reshape(len(Ke), -1)), axis=1))
-        if bad.size:
+        if not (np.isfinite(fe).all() and (not want_tangent or np.isfinite(Ke).all())):
+            bad = np.flatnonzero(~np.all(np.isfinite(fe), axis=1))
+            if bad.size == 0 and want_tangent:
+                bad = np.flatnonzero(~np.all(np.isfinite(Ke.reshape(len(Ke), -1)), axis=1))
             raise FloatingPointError(f"element {bad[0]} gives non-finite internal forces or tangent "
                                      f"({bad.size} element(s)); nodes {self.body.mesh.elements[bad[0]].tolist()}")
         n = self.body.n_nodes
-        r6 = np.zeros(6 * n)
-        np.add.at(r6, self._dof6, fe)
+        r6 = self._sum_element_vectors(fe)
+        if not want_tangent and self._unloaded():   # no loads: f_ext = 0, and no load blocks are asked for
+            return r6, None, None, [], r6
         fext, ext_blocks, press = self._external_local(state, lam)     # scaled by the load factors
-        bad = np.flatnonzero(~np.all(np.isfinite(fext), axis=1))
-        if bad.size:
+        if not np.isfinite(fext).all():
+            bad = np.flatnonzero(~np.all(np.isfinite(fext), axis=1))
             raise FloatingPointError(f"non-finite external load at node {bad[0]}: {fext[bad[0]].tolist()}")
-        r6 = r6.reshape(n, 6) - fext
+        r6 = r6 - fext
         turning = r6
         if fs is not None:
-            turning = np.zeros(6 * n)
-            np.add.at(turning, self._dof6, fs)
-            turning = turning.reshape(n, 6) - fext
+            turning = self._sum_element_vectors(fs) - fext
         return r6, Ke, ext_blocks, press, turning
+
+    def _unloaded(self) -> bool:
+        """No nodal load and no pressure: f_ext = 0 at every state and load factor (read from the load arrays
+        at each call: they are plain arrays a caller may change)."""
+        if self.pressures:
+            return False
+        if self.n_load_groups == 1:
+            return not (self.dead.any() or self.follower.any())
+        return not (self._group_dead.any() or self._group_follower.any())
+
+    def _sum_element_vectors(self, fe: np.ndarray) -> np.ndarray:
+        """The nodal sums (n, 6) of element vectors (m, 36) in the nodal local frames. A bincount adds the entries
+        in the order np.add.at does (each node's sum, term by term, in element order): the same bits, 5-10x
+        faster."""
+        n = self.body.n_nodes
+        return np.bincount(self._dof6_flat, weights=fe.ravel(), minlength=6 * n).reshape(n, 6)
 
     def nodal_out_of_balance(self, state: ShellState, lam: float | np.ndarray = 1.0):
         """f_int - f_ext (n, 6) and f_ext (n, 6) per node [force, moment] in the nodal local frames, all DoFs
@@ -358,14 +374,20 @@ class Model:
         out[:, :3] = np.einsum("nij,nj->ni", self._row_maps(state), r6[:, :3])
         return out
 
-    def residual_and_tangent(self, state: ShellState, lam: float | np.ndarray):
-        """r (free,) and the tangent K = dr/dq (free x free, CSC) at the state (``lam`` as in :meth:`residual`)."""
+    def residual_and_tangent(self, state: ShellState, lam: float | np.ndarray, global_columns: bool = False):
+        """r (free,) and the tangent K = dr/dq (free x free, CSC) at the state (``lam`` as in :meth:`residual`).
+
+        ``global_columns``: the translation columns of the nodes without a fixed basis along the global
+        directions (delta x_I = delta v_I, so delta u_I = R_I^T delta v_I) instead of the local increments: the
+        tangent K D with D the block R_I^T on those columns (the layout of :class:`flexbody.dynamics.DynamicModel`),
+        made in the scatter at no extra cost."""
         r6, Ke, ext_blocks, press, turning = self._residual6(state, lam, want_tangent=True)
         self.counters.tangents += 1
         n = self.body.n_nodes
         conn = self.body.mesh.elements
         S = self._row_maps(state)                                   # rows: S_I r_u,I
-        C = np.tile(np.eye(3), (n, 1, 1))                           # columns: delta u_I = C_I delta v_I
+        # columns: delta u_I = C_I delta v_I
+        C = np.transpose(state.frames, (0, 2, 1)).copy() if global_columns else np.tile(np.eye(3), (n, 1, 1))
         idx = np.flatnonzero(self.has_basis)
         C[idx] = np.transpose(S[idx], (0, 2, 1))
         data = np.zeros(self._indices.size)
@@ -449,9 +471,7 @@ class Model:
     def assemble_element_forces(self, state: ShellState, fe: np.ndarray) -> np.ndarray:
         """Element force vectors (m, 36) in the nodal local frames -> their equations on the free DoFs (the
         rows of :meth:`residual`)."""
-        r6 = np.zeros(6 * self.body.n_nodes)
-        np.add.at(r6, self._dof6, fe)
-        return self._rotate_rows(state, r6.reshape(-1, 6)).ravel()[self.free]
+        return self._rotate_rows(state, self._sum_element_vectors(fe)).ravel()[self.free]
 
     @property
     def supports_mixed_iteration(self) -> bool:

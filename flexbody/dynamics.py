@@ -243,6 +243,7 @@ class DynamicModel:
             if bad.size:
                 raise ValueError(f"prescribed motion on node {bad[0]}, which is not clamped (Fix(..., 'all'))")
         self._M_fp = self._prescribed_coupling()
+        self._prescribed_cache: dict[int, tuple] = {}     # :meth:`_prescribed_place`
 
     # -- the mass matrix -----------------------------------------------------------------------------------
     def translation_directions(self) -> sp.csr_matrix:
@@ -347,13 +348,25 @@ class DynamicModel:
         if not self.prescribed:
             return state
         new = state.copy()
-        X, N = self.model.body.mesh.nodes, self.model.body.frames0[:, :, 2]
-        for p in self.prescribed:
-            Q, d = p.motion(t)
-            Q, d = np.asarray(Q, float), np.asarray(d, float)
-            new.x[p.nodes] = X[p.nodes] @ Q.T + d
-            new.frames[p.nodes] = director_step(state.frames[p.nodes], N[p.nodes] @ Q.T)
+        for k, p in enumerate(self.prescribed):
+            new.x[p.nodes], new.frames[p.nodes] = self._prescribed_place(k, state.frames[p.nodes], t)
         return new
+
+    def _prescribed_place(self, k: int, frames: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """Positions and frames at time t of the nodes of prescribed motion k whose frames are now ``frames``.
+
+        Every iterate of a time step asks for the same ones (the free-DoF corrections do not move clamped
+        nodes): the last answer is kept, keyed on t and the frames it was made from."""
+        cached = self._prescribed_cache.get(k)
+        if cached is not None and cached[0] == t and np.array_equal(cached[1], frames):
+            return cached[2], cached[3]
+        p = self.prescribed[k]
+        X, N = self.model.body.mesh.nodes[p.nodes], self.model.body.frames0[p.nodes, :, 2]
+        Q, d = p.motion(t)
+        Q, d = np.asarray(Q, float), np.asarray(d, float)
+        x, moved = X @ Q.T + d, director_step(frames, N @ Q.T)
+        self._prescribed_cache[k] = (t, frames.copy(), x, moved)
+        return x, moved
 
     def _column_map(self, state: ShellState) -> sp.csc_matrix:
         """D with K_dyn = K_model D: block R_I^T on the translation columns of the local-column nodes."""
@@ -381,8 +394,7 @@ class DynamicModel:
 
         K_t is the tangent of f_int - lambda f_ext; the damping force's derivative in q is left out (an
         approximation of the iteration matrix only; its velocity derivative is :meth:`damping_matrix`)."""
-        r, K = self.model.residual_and_tangent(state, self.lam(t))
-        K = (K @ self._column_map(state)).tocsc()
+        r, K = self.model.residual_and_tangent(state, self.lam(t), global_columns=True)
         return (self._M @ vdot + self.damping_force(state, v) + r - self._gravity_force
                 + self._prescribed_inertia(t), K)
 
@@ -437,8 +449,7 @@ class DynamicModel:
         loads; the velocity derivative of :meth:`material_damping_force`. MITC6 variants."""
         zero = state.copy()
         zero.stress = np.zeros((self.model.body.mesh.n_elements, 7, 8))
-        K = self.model.residual_and_tangent(zero, 0.0)[1]
-        return (K @ self._column_map(state)).tocsc()
+        return self.model.residual_and_tangent(zero, 0.0, global_columns=True)[1]
 
     def consistent_director_rates(self, state: ShellState, v: np.ndarray) -> np.ndarray:
         """v with its rotation components replaced by the director rates that minimise the strain-rate energy

@@ -54,6 +54,28 @@ def test_model_tangent_with_symmetry_basis_and_loads():
     assert fd_check(model, state, 0.7) < 1e-6
 
 
+def test_nodal_sums_of_element_vectors_are_those_of_add_at():
+    """The residual's nodal sums (a bincount) are np.add.at's, bit for bit: the same terms in the same order."""
+    model = cylinder_model(kernel="numba")
+    fe = np.random.default_rng(4).normal(size=(model.body.mesh.n_elements, 36)) * 10.0 ** np.arange(-6, 6, 1 / 3)
+    expected = np.zeros(6 * model.body.n_nodes)
+    np.add.at(expected, model._dof6, fe)
+    assert np.array_equal(model._sum_element_vectors(fe).ravel(), expected)
+
+
+def test_an_unloaded_model_has_no_external_force():
+    """Without loads the residual skips the external load; loads written into the arrays later are seen."""
+    mesh = generators.strip(1.0, 1.0, 2, 2)
+    model = Model(ShellBody(mesh, ShellMaterial(1e4, 0.3, 0.05)), [Fix(mesh.node_sets["clamped"], "all")])
+    state = random_state(model, np.random.default_rng(5))
+    assert model._unloaded()
+    r = model.residual(state, 1.0)
+    assert np.allclose(r, model.residual_and_tangent(state, 1.0)[0], rtol=0.0, atol=1e-12 * np.abs(r).max())
+    model.dead[mesh.nearest_node([1.0, 1.0, 0.0]), 2] = 2.0
+    assert not model._unloaded()
+    assert np.abs(model.residual(state, 1.0) - r).max() > 1.0
+
+
 def test_symmetry_frames_keep_their_plane():
     """On a symmetry plane the nodal frame keeps one in-plane axis along the plane normal."""
     model = cylinder_model()

@@ -1932,6 +1932,29 @@ def compress_maps(A: np.ndarray) -> CompressedMaps:
     return maps
 
 
+_SECTION_CACHE: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def _checked_section(section: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The section stiffness (8, 8) as a contiguous float64 array, checked (shape, symmetry), and its block
+    coupling flags (:func:`_section_blocks`); cached on its contents (a solve passes the same section at every
+    evaluation: the checks cost 5 % of a small batch's residual)."""
+    C = np.ascontiguousarray(section, dtype=np.float64)
+    if C.shape != (8, 8):
+        raise ValueError(f"section must be (8, 8), got {C.shape}")
+    key = C.tobytes()
+    hit = _SECTION_CACHE.get(key)
+    if hit is not None:
+        return hit
+    if not np.allclose(C, C.T, rtol=0.0, atol=1e-13 * np.abs(C).max()):
+        raise ValueError("section stiffness must be symmetric")
+    if len(_SECTION_CACHE) > 8:
+        _SECTION_CACHE.clear()
+    C = C.copy()                      # the cached array is the kernel's own: a caller's later edits do not reach it
+    hit = _SECTION_CACHE[key] = (C, _section_blocks(C))
+    return hit
+
+
 def _n_chunks(m: int) -> int:
     """Parallel chunks: a few per thread, and one (no thread hand-off) for small batches."""
     if m < 128:
@@ -1973,11 +1996,7 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
     x_el, frames_el, e_ref, to_cart, weights = _element_arrays(x_el, frames_el, e_ref, to_cart,
                                                                weights=(weights, (N_GAUSS,)))
     m = x_el.shape[0]
-    C = np.ascontiguousarray(section, dtype=np.float64)
-    if C.shape != (8, 8):
-        raise ValueError(f"section must be (8, 8), got {C.shape}")
-    if not np.allclose(C, C.T, rtol=0.0, atol=1e-13 * np.abs(C).max()):
-        raise ValueError("section stiffness must be symmetric")
+    C, cblk = _checked_section(section)
     use_stress = stress is not None
     stress = _as(stress, (N_GAUSS, 8), "stress") if use_stress else np.zeros((1, N_GAUSS, 8))
     if use_stress and len(stress) != m:
@@ -1987,7 +2006,7 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
     fs = np.empty((m, NDOF)) if use_stress else np.empty((1, NDOF))
     K = np.empty((m, NDOF, NDOF)) if want_tangent else np.empty((1, NDOF, NDOF))
     if m:
-        _batch(x_el, frames_el, e_ref, to_cart, weights, C, _section_blocks(C), *maps.kernel_args(),
+        _batch(x_el, frames_el, e_ref, to_cart, weights, C, cblk, *maps.kernel_args(),
                bool(want_tangent), use_stress, stress, _n_chunks(m), f, fs, K)
     if use_stress:
         return f, (K if want_tangent else None), fs

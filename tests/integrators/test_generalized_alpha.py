@@ -453,6 +453,26 @@ def test_hub_driven_strip_reaches_the_rotating_bar_stretch():
     assert np.allclose(out.state.frames[hub], dyn.model.body.frames0[hub], atol=1e-12)
 
 
+def test_prescribed_places_are_kept_for_the_iterates_of_a_step():
+    """The prescribed nodes' places at t are computed once per step (all iterates share the clamped frames) and
+    recomputed for another time or other frames: the same states as a model that never kept one."""
+    mesh, plain = cantilever(2)
+    hub = mesh.node_sets["clamped"]
+
+    def motion(t):
+        return so3.exp(np.array([0.0, 0.3 * t, 2.0 * t])), np.array([0.1 * t, 0.0, 0.0])
+
+    kept = DynamicModel(plain.model, prescribed=[PrescribedMotion(hub, motion)])
+    state = plain.model.initial_state()
+    for t in (0.1, 0.1, 0.2, 0.2):
+        a = kept.prescribe(state, t)
+        b = DynamicModel(plain.model, prescribed=[PrescribedMotion(hub, motion)]).prescribe(state, t)
+        assert np.array_equal(a.x, b.x) and np.array_equal(a.frames, b.frames)
+        state = a
+    a.x[hub] += 1.0                                         # the returned state is the caller's own
+    assert not np.array_equal(kept.prescribe(state, 0.2).x[hub], a.x[hub])
+
+
 def test_prescribed_motion_needs_clamped_nodes_and_turns_directors_without_drilling():
     mesh, dyn = cantilever(2)
     free_node = mesh.node_sets["tip"][:1]

@@ -162,6 +162,20 @@ def test_dynamic_tangent_against_group_finite_differences(rng):
     assert np.allclose(r, dyn.residual(state, z, vdot, 0.3))
 
 
+def test_global_columns_are_the_model_tangent_times_the_column_map(rng):
+    """The dynamic layout's tangent is made in the scatter (``global_columns``): the Model's tangent with local
+    translation columns times the column map D (R_I^T on the local-column nodes), to round-off."""
+    dyn = constrained_dynamic_model()
+    state = dyn.model.initial_state()
+    for _ in range(3):
+        state = dyn.update(state, 0.05 * rng.normal(size=dyn.n_dof))
+    r_local, K_local = dyn.model.residual_and_tangent(state, 1.3)
+    r, K = dyn.model.residual_and_tangent(state, 1.3, global_columns=True)
+    assert np.array_equal(r, r_local)
+    expected = (K_local @ dyn._column_map(state)).toarray()
+    assert np.abs(K.toarray() - expected).max() < 1e-13 * np.abs(expected).max()
+
+
 def test_translation_increments_are_global_and_exact(rng):
     dyn = constrained_dynamic_model()
     state = dyn.update(dyn.model.initial_state(), 0.1 * rng.normal(size=dyn.n_dof))
