@@ -4,10 +4,8 @@ reads them from there."""
 from __future__ import annotations
 
 import ast
-import importlib
 import inspect
 from pathlib import Path
-import pkgutil
 
 import pytest
 
@@ -21,10 +19,10 @@ REPO = Path(__file__).resolve().parents[2]
 #: string literals naming a built-in scene outside the registry and the builders, and why they may
 ALLOWED_LITERALS = {
     "flexbody/cli.py": {"cantilever_end_moment"},          # DEFAULT_SCENE, read when the parser is built
+    # the exudyn adapter's own model builders, one per scene with a plate model, and its membrane-in-exudyn run
+    "flexbody/adapters/exudyn/references_static.py": {"slit_annular_plate", "pullout_cylinder", "hemisphere"},
+    "flexbody/adapters/exudyn/ode2.py": {"spinning_membrane"},
 }
-#: the exudyn adapter still has its own tables (models, tolerances, meshes); the registry holds the same
-#: data (exudyn_models, exudyn_rtol, exudyn_mesh, checked below) for the adapter to read
-ALLOWED_PREFIXES = ("flexbody/adapters/exudyn",)
 BUILDERS = ("flexbody/scenes/registry.py", "flexbody/scenes/benchmark_scenes.py", "flexbody/scenes/dynamic_scenes.py")
 
 
@@ -98,7 +96,7 @@ def test_no_other_module_spells_a_builtin_scene_name():
     found = {}
     for path in sorted((REPO / "flexbody").rglob("*.py")):
         rel = path.relative_to(REPO).as_posix()
-        if rel in BUILDERS or rel.startswith(ALLOWED_PREFIXES):
+        if rel in BUILDERS:
             continue
         extra = _scene_literals(path) - ALLOWED_LITERALS.get(rel, set())
         if extra:
@@ -106,25 +104,22 @@ def test_no_other_module_spells_a_builtin_scene_name():
     assert not found, f"built-in scene names outside flexbody.scenes.registry: {found}"
 
 
-def _adapter(name: str):
-    """A table of the exudyn adapter (a module today; a package of modules after its split)."""
-    package = importlib.import_module("flexbody.adapters.exudyn")
-    modules = [package] + [importlib.import_module(f"{package.__name__}.{m.name}")
-                           for m in pkgutil.iter_modules(getattr(package, "__path__", []))]
-    for module in modules:
-        if hasattr(module, name):
-            return getattr(module, name)
-    pytest.fail(f"the exudyn adapter has no {name}: read the registry's exudyn data there instead")
-
-
-def test_the_registry_has_the_exudyn_adapters_data():
+def test_the_exudyn_adapter_reads_its_tables_from_the_registry():
+    """The adapter's models, tolerances and meshes are the registry's (the values it had as its own tables)."""
     pytest.importorskip("exudyn")
-    models, rtol, dynamic = _adapter("MODELS"), _adapter("_RTOL_SCENE"), _adapter("DYNAMIC_SCENES")
-    assert {n: e.exudyn_models for n, e in SCENES.items() if e.exudyn_models} == dict(models)
-    assert {n: e.exudyn_rtol for n, e in SCENES.items() if e.exudyn_rtol is not None} == dict(rtol)
-    assert exudyn_scenes("dynamic") == tuple(dynamic)
-    default_mesh = _adapter("_default_mesh")
+    from flexbody.adapters.exudyn import options, references_static
+    strip = ("beam3d", "beam2d", "plate")
+    assert options.MODELS == {"cantilever_end_moment": strip, "cantilever_end_shear": strip,
+                              "slit_annular_plate": ("plate",), "pullout_cylinder": ("plate",),
+                              "hemisphere": ("plate",), "spinning_plate": ("plate",)}
+    assert options.DYNAMIC_SCENES == ("spinning_plate",)
+    assert {n: e.exudyn_rtol for n, e in SCENES.items() if e.exudyn_rtol is not None} == {
+        "slit_annular_plate": 1e-6, "pullout_cylinder": 1e-6, "hemisphere": 1e-5}
+    assert not hasattr(references_static, "_RTOL_SCENE")
     for name in exudyn_scenes():
         entry = SCENES[name]
         scene = entry.build(**_small(entry))
-        assert default_mesh(scene, "plate") == tuple(scene.parameters[k] for k in entry.exudyn_mesh), name
+        nx, ny = (scene.parameters[k] for k in entry.exudyn_mesh)
+        assert options._default_mesh(scene, "plate") == (nx, ny), name
+        if "beam2d" in entry.exudyn_models:
+            assert options._default_mesh(scene, "beam2d") == (2 * nx, 1), name

@@ -5,20 +5,15 @@ Imports no exudyn: the option checks run before any model is built.
 
 from __future__ import annotations
 
+from flexbody.scenes.registry import SCENES, exudyn_scenes
 from flexbody.scenes.scene import Scene
 
-#: exudyn models available for each built-in scene; the first is the default
-MODELS: dict[str, tuple[str, ...]] = {
-    "cantilever_end_moment": ("beam3d", "beam2d", "plate"),
-    "cantilever_end_shear": ("beam3d", "beam2d", "plate"),
-    "slit_annular_plate": ("plate",),
-    "pullout_cylinder": ("plate",),
-    "hemisphere": ("plate",),
-    "spinning_plate": ("plate",),
-}
+#: exudyn models available for each built-in scene, the default first (from the scene registry)
+MODELS: dict[str, tuple[str, ...]] = {name: entry.exudyn_models for name, entry in SCENES.items()
+                                      if entry.exudyn_models}
 
 #: dynamic scenes with an exudyn model (``compare`` runs them as dynamic comparisons)
-DYNAMIC_SCENES = ("spinning_plate",)
+DYNAMIC_SCENES = exudyn_scenes("dynamic")
 
 #: the prefix of exudyn options among the scene parameters
 OPTION_PREFIX = "exudyn_"
@@ -56,13 +51,10 @@ def model_kind(scene_name: str, options: dict) -> str:
 
 
 def _default_mesh(scene: Scene, kind: str) -> tuple[int, int]:
-    """Element counts: beams get one element per flexbody node spacing (2 nx), plates one quad per cell."""
-    p = scene.parameters
-    if scene.name in ("cantilever_end_moment", "cantilever_end_shear"):
-        return (2 * p["nx"], 1) if kind.startswith("beam") else (p["nx"], p["ny"])
-    keys = {"slit_annular_plate": ("n_radial", "n_circ"), "pullout_cylinder": ("n_circ", "n_axial"),
-            "hemisphere": ("n_circ", "n_meridian"), "spinning_plate": ("nx", "ny")}[scene.name]
-    return p[keys[0]], p[keys[1]]
+    """Element counts from the scene's two mesh parameters (the registry's ``exudyn_mesh``): plates one quad
+    per cell, beams one element per flexbody node spacing (2 nx)."""
+    nx, ny = (scene.parameters[key] for key in SCENES[scene.name].exudyn_mesh)
+    return (2 * nx, 1) if kind.startswith("beam") else (nx, ny)
 
 
 def element_counts(scene: Scene, kind: str, options: dict) -> tuple[int, int]:

@@ -43,11 +43,11 @@ from flexbody.adapters.exudyn.system import (material, nearest, new_system, newt
                                              pseudo_time_load_factor, run_solver, static_settings)
 from flexbody.loads import NodalLoad
 from flexbody.scenes import build
+from flexbody.scenes.registry import SCENES
 from flexbody.scenes.scene import DynamicAnalysis, Scene, compare_with_reference
 
 #: exudyn relative Newton tolerance per model kind and scene (see the module docstring)
 _RTOL = {"beam3d": 1e-10, "beam2d": 1e-10, "plate": 1e-8}
-_RTOL_SCENE = {"slit_annular_plate": 1e-6, "pullout_cylinder": 1e-6, "hemisphere": 1e-5}
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -497,7 +497,8 @@ def build_model(scene: Scene, options: dict | None = None) -> ExudynModel:
     if isinstance(scene.analysis, DynamicAnalysis):
         raise ValueError(f"scene {scene.name!r} is dynamic: use build_dynamic_model")
     nx, ny = element_counts(scene, kind, options)
-    rtol = float(options.get("rtol", _RTOL_SCENE.get(scene.name, _RTOL[kind])))
+    scene_rtol = SCENES[scene.name].exudyn_rtol
+    rtol = float(options.get("rtol", _RTOL[kind] if scene_rtol is None else scene_rtol))
     load_factors = _load_factors(scene, options.get("steps"))
     t0 = time.perf_counter()
     if kind == "beam2d":
