@@ -502,8 +502,6 @@ def cmd_run(args) -> int:
             restart = read_restart(restart_spec, scene)
         except RestartError as exc:
             raise CliError(str(exc)) from None
-        if scene.kind == "static" and scene.analysis.method != "load_control":
-            raise CliError("--restart continues a load-control path only; this scene uses arc length")
     from flexbody.outputs.recording import OutputStopped, RunRecorder
     try:
         recorder = RunRecorder(scene, h5=args.h5, rerun=args.rerun, directors=args.directors,

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
+import inspect
 import time
 from typing import Callable, ClassVar
 
@@ -274,11 +275,15 @@ class DynamicAnalysis:
         return bool(self.alpha_settings().adaptive)
 
 
+_ARC_MAX_STEPS = inspect.signature(arc_length).parameters["max_steps"].default
+
+
 @dataclass
 class RestartPoint:
     """A saved step to continue a run from (:func:`flexbody.outputs.restart.read_restart`): its step number,
     load factor (static) or time (dynamic), the state, and for a dynamic run the free-DoF velocity v,
-    acceleration vdot and generalized-alpha pseudo-acceleration a, and the work dissipated until then."""
+    acceleration vdot and generalized-alpha pseudo-acceleration a, and the work dissipated until then; for an
+    arc-length path the :class:`integrators.static.ArcLengthState` of the step (``continuation``)."""
 
     step: int
     where: float
@@ -287,6 +292,7 @@ class RestartPoint:
     vdot: np.ndarray | None = None
     a: np.ndarray | None = None
     dissipated_energy: float = 0.0
+    continuation: object | None = None
 
 
 @dataclass
@@ -531,8 +537,9 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
     started : the ``time.perf_counter()`` reading when the set-up began (e.g. before building the scene);
         default: the call
     restart : continue from a saved step (:class:`RestartPoint`): a dynamic run from its time step, a static
-        load-control path from its load factor to the levels beyond it (steps numbered on from the saved
-        one); the history starts at the saved step (dynamic) or after it (static)
+        load-control path from its load factor to the levels beyond it, an arc-length path from its
+        continuation (the remaining ``max_steps``; steps numbered on from the saved one); the history starts
+        at the saved step (dynamic) or after it (static)
 
     Returns
     -------
@@ -550,6 +557,8 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
     def record(rec, state):
         if restart is not None:
             rec.step += restart.step
+            if getattr(rec, "critical", None) is not None:
+                rec.critical.step += restart.step
         history["load_factor"].append(rec.load_factor)
         for out in scene.outputs:
             history[out.name].append(out.value(model, state))
@@ -565,9 +574,22 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
     if a.method not in ("load_control", "arc_length"):
         raise ValueError(f"analysis method must be 'load_control' or 'arc_length', got {a.method!r}")
     with kernel_threads(None, model.body.mesh.n_elements):
-        if restart is not None:
-            if a.method != "load_control":
-                raise ValueError("a restart continues a load-control path only (this scene uses arc length)")
+        if restart is not None and a.method == "arc_length":
+            if restart.continuation is None:
+                raise ValueError("an arc-length restart needs the continuation of its step (arc length, direction)")
+            if restart.where >= max(a.load_factors):
+                raise ValueError(f"restart at load factor {restart.where:g}: the path ended there (the scene "
+                                 f"goes to {max(a.load_factors):g})")
+            options = dict(a.arc_options)
+            max_steps = options.pop("max_steps", _ARC_MAX_STEPS) - restart.step
+            if max_steps < 1:
+                raise ValueError(f"restart at step {restart.step}: the scene's max_steps "
+                                 f"{max_steps + restart.step} are used up")
+            result = arc_length(model, lam_max=max(a.load_factors), initial_increment=a.arc_increment,
+                                max_load_increment=a.max_load_increment, settings=a.newton, on_step=record,
+                                check_stability=a.stability, state=restart.state,
+                                continuation=restart.continuation, max_steps=max_steps, **options)
+        elif restart is not None:
             levels = [lf for lf in a.load_factors if lf > restart.where + _level_tolerance(np.asarray(a.load_factors))]
             if not levels:
                 raise ValueError(f"restart at load factor {restart.where:g}: no load level of the scene lies beyond it")
