@@ -192,11 +192,14 @@ class _Progress:
     """Progress on stderr: the kernels' compilation notices (:meth:`notify`) and a line per step (call); the
     steps' clock starts when the kernels are ready. With a ``goal`` (the last load factor of a load-controlled
     path, or the end time of a dynamic run) each line shows how far the run is, in per cent of the goal, and
-    the time left at the rate so far (cut-backs and adaptive steps change the number of steps, not the goal)."""
+    the time left at the rate so far (cut-backs and adaptive steps change the number of steps, not the goal).
+    ``steps``: print the step lines (``_progress_printer`` asks for them only when stderr is a terminal; the
+    compilation notices are printed either way, they explain a first run's wait in a log too)."""
 
-    def __init__(self, prefix: str = "", goal: float | None = None) -> None:
+    def __init__(self, prefix: str = "", goal: float | None = None, steps: bool = True) -> None:
         self.prefix = prefix
         self.goal = goal
+        self.steps = steps
         self.t0 = time.perf_counter()
 
     def notify(self, notice) -> None:
@@ -206,6 +209,8 @@ class _Progress:
             self.t0 = time.perf_counter()
 
     def __call__(self, rec) -> None:
+        if not self.steps:
+            return
         if hasattr(rec, "time"):   # a dynamic step record
             where = f"time {rec.time:10.5g} s  iterations {rec.iterations:2d}  energy {rec.total_energy:11.5g}"
             position = rec.time
@@ -232,9 +237,18 @@ def _progress_goal(scene) -> float | None:
     return float(end) if end else None
 
 
+def _stderr_is_terminal() -> bool:
+    """Whether standard error is a terminal (not a file, a pipe or a CI log)."""
+    try:
+        return bool(sys.stderr.isatty())
+    except (AttributeError, ValueError):       # replaced by an object without it, or closed
+        return False
+
+
 def _progress_printer(quiet: bool, prefix: str = "", goal: float | None = None) -> _Progress | None:
-    """The progress printer on stderr (None with --quiet)."""
-    return None if quiet else _Progress(prefix, goal)
+    """The progress printer on stderr (None with --quiet): its step lines only when stderr is a terminal
+    (a line per step in a redirected log or a pipe is noise), the compilation notices always."""
+    return None if quiet else _Progress(prefix, goal, steps=_stderr_is_terminal())
 
 
 def _run_scene(scene, on_step=None, quiet: bool = False, prefix: str = "", started: float | None = None,
