@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import argparse
 import ast
-from contextlib import contextmanager
+from contextlib import contextmanager, redirect_stdout
 import json
 import math
 import os
@@ -173,6 +173,65 @@ def _write_json_stdout(data) -> None:
     sys.stdout.flush()
 
 
+class _RenamedStream:
+    """A text stream that writes to ``stream`` with ``old`` shown as ``new`` (the temporary JSON file of
+    ``--json -`` named as standard output in the lines that report it written)."""
+
+    def __init__(self, stream, old: str, new: str) -> None:
+        self._stream, self._old, self._new = stream, old, new
+
+    def write(self, text: str) -> int:
+        self._stream.write(text.replace(self._old, self._new))
+        return len(text)
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+@contextmanager
+def _stdout_to_stderr(temporary: str):
+    """While a command runs for ``--json -``: what it prints goes to standard error, through Python's
+    ``sys.stdout`` and through file descriptor 1 (a library may print from C); ``temporary`` is shown as
+    "standard output". Descriptor 1 is restored on the way out, whatever happens."""
+    sys.stdout.flush()
+    try:
+        saved = os.dup(1)
+        os.dup2(2, 1)
+    except OSError:                              # no descriptor 1 or 2: Python's stream only
+        saved = None
+    try:
+        with redirect_stdout(_RenamedStream(sys.stderr, temporary, "standard output")):
+            yield
+    finally:
+        sys.stderr.flush()
+        if saved is not None:
+            os.dup2(saved, 1)
+            os.close(saved)
+
+
+def _with_json_to_stdout(args, command) -> int:
+    """``command(args)`` with ``--json -``: the command writes its JSON to a temporary file while its printed
+    text goes to standard error (:func:`_stdout_to_stderr`); then that JSON alone goes to standard output
+    (nothing if the command stopped before writing it). ``flexbody run`` writes its own (:func:`cmd_run`)."""
+    import tempfile
+    real = sys.stdout
+    fd, temporary = tempfile.mkstemp(prefix="flexbody-", suffix=".json")
+    os.close(fd)
+    args.json = temporary
+    try:
+        with _stdout_to_stderr(temporary):
+            code = command(args)
+        with open(temporary, encoding="utf-8") as fh:
+            text = fh.read()
+        if text.strip():
+            real.write(text.rstrip("\n") + "\n")
+            real.flush()
+        return code
+    finally:
+        args.json = "-"
+        os.unlink(temporary)
+
+
 def _strict_json(value):
     """NaN/inf as null so that every JSON reader accepts the file."""
     if isinstance(value, dict):
@@ -188,11 +247,14 @@ class _Progress:
     """Progress on stderr: the kernels' compilation notices (:meth:`notify`) and a line per step (call); the
     steps' clock starts when the kernels are ready. With a ``goal`` (the last load factor of a load-controlled
     path, or the end time of a dynamic run) each line shows how far the run is, in per cent of the goal, and
-    the time left at the rate so far (cut-backs and adaptive steps change the number of steps, not the goal)."""
+    the time left at the rate so far (cut-backs and adaptive steps change the number of steps, not the goal).
+    ``steps``: print the step lines (``_progress_printer`` asks for them only when stderr is a terminal; the
+    compilation notices are printed either way, they explain a first run's wait in a log too)."""
 
-    def __init__(self, prefix: str = "", goal: float | None = None) -> None:
+    def __init__(self, prefix: str = "", goal: float | None = None, steps: bool = True) -> None:
         self.prefix = prefix
         self.goal = goal
+        self.steps = steps
         self.t0 = time.perf_counter()
 
     def notify(self, notice) -> None:
@@ -202,6 +264,8 @@ class _Progress:
             self.t0 = time.perf_counter()
 
     def __call__(self, rec) -> None:
+        if not self.steps:
+            return
         if hasattr(rec, "time"):   # a dynamic step record
             where = f"time {rec.time:10.5g} s  iterations {rec.iterations:2d}  energy {rec.total_energy:11.5g}"
             position = rec.time
@@ -228,9 +292,18 @@ def _progress_goal(scene) -> float | None:
     return float(end) if end else None
 
 
+def _stderr_is_terminal() -> bool:
+    """Whether standard error is a terminal (not a file, a pipe or a CI log)."""
+    try:
+        return bool(sys.stderr.isatty())
+    except (AttributeError, ValueError):       # replaced by an object without it, or closed
+        return False
+
+
 def _progress_printer(quiet: bool, prefix: str = "", goal: float | None = None) -> _Progress | None:
-    """The progress printer on stderr (None with --quiet)."""
-    return None if quiet else _Progress(prefix, goal)
+    """The progress printer on stderr (None with --quiet): its step lines only when stderr is a terminal
+    (a line per step in a redirected log or a pipe is noise), the compilation notices always."""
+    return None if quiet else _Progress(prefix, goal, steps=_stderr_is_terminal())
 
 
 def _run_scene(scene, on_step=None, quiet: bool = False, prefix: str = "", started: float | None = None,
@@ -497,8 +570,6 @@ def cmd_run(args) -> int:
             restart = read_restart(restart_spec, scene)
         except RestartError as exc:
             raise CliError(str(exc)) from None
-        if scene.kind == "static" and scene.analysis.method != "load_control":
-            raise CliError("--restart continues a load-control path only; this scene uses arc length")
     from flexbody.outputs.recording import OutputStopped, RunRecorder
     try:
         recorder = RunRecorder(scene, h5=args.h5, rerun=args.rerun, directors=args.directors,
@@ -777,7 +848,10 @@ def cmd_sweep(args) -> int:
     an existing one, or in this process with ``--workers 0``); write DIR/sweep.csv, DIR/sweep.json, the plots
     DIR/vs_<parameter>.png and with --h5 DIR/runs/run_<index>.h5. Returns 0 if every run converged and can be
     trusted, 2 if some failed, did not converge or were lost, 3 if all completed but some are not to be
-    trusted, 130 / 143 if stopped by Ctrl-C / SIGTERM (the finished results written)."""
+    trusted, 130 / 143 if stopped by Ctrl-C / SIGTERM (the finished results written). ``--json -``: the table's
+    JSON alone on standard output, the printed lines on standard error."""
+    if args.json == "-":
+        return _with_json_to_stdout(args, cmd_sweep)
     from flexbody.sweep import grid_points, make_tasks, plot_sweep, summary_line, write_table, exit_code
     _check_workers(args)
     fixed = _parse_sets(args.set or [])
@@ -815,7 +889,10 @@ def cmd_sweep(args) -> int:
 # ----------------------------------------------------------------------------------------------------------
 
 def cmd_compare(args) -> int:
-    """``flexbody compare SCENE --with exudyn``: hand over to ``flexbody.adapters.exudyn.compare_cli``."""
+    """``flexbody compare SCENE --with exudyn``: hand over to ``flexbody.adapters.exudyn.compare_cli``
+    (``--json -``: the comparison's JSON alone on standard output, the table on standard error)."""
+    if args.json == "-":
+        return _with_json_to_stdout(args, cmd_compare)
     params = _parse_sets(args.set or [])
     _check_outputs({"--json": args.json})
     try:
@@ -1138,7 +1215,10 @@ def _modes_once(source, params: dict, args, omega, quiet: bool):
 def cmd_modes(args) -> int:
     """``flexbody modes``: natural frequencies and mode shapes about an equilibrium (one analysis), or a
     Campbell diagram (``--sweep``), or with ``--buckling`` the linear buckling of a static scene's load pattern
-    (:func:`cmd_buckling`). Exit code 0, or 1 (bad input / an analysis that fails)."""
+    (:func:`cmd_buckling`). Exit code 0, or 1 (bad input / an analysis that fails). ``--json -``: the JSON
+    alone on standard output, the printed table on standard error."""
+    if args.json == "-":
+        return _with_json_to_stdout(args, cmd_modes)
     if getattr(args, "buckling", False):
         others = [name for name, value in (("--omega", args.omega), ("--load-factor", args.load_factor),
                                            ("--sweep", args.sweep), ("--shift", args.shift), ("--plot", args.plot),
@@ -1221,7 +1301,8 @@ def add_modes_parser(sub) -> None:
                        help="Campbell diagram: the frequencies against a --set parameter, or omega (the spin rate)")
     modes.add_argument("--shift", type=float, metavar="S",
                        help="the eigen-solver's shift in (rad/s)^2 (default: from the model)")
-    modes.add_argument("--json", metavar="FILE", help="write the frequencies and modes (or the sweep) as JSON")
+    modes.add_argument("--json", metavar="FILE", help="write the frequencies and modes (or the sweep) as JSON "
+                       "('-': to standard output, the printed table then goes to standard error)")
     modes.add_argument("--plot", metavar="FILE.png", help="plot the mode shapes (or the Campbell diagram)")
     modes.add_argument("--rerun", metavar="FILE.rrd", help="animated mode shapes in a rerun recording")
     modes.add_argument("--h5", metavar="FILE.h5", help="the mode shapes in an HDF5 file")
@@ -1295,7 +1376,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "taking all combinations")
     sweep.add_argument("--set", action="append", metavar="KEY=VALUE", help="a fixed parameter of every run")
     sweep.add_argument("--out", default="sweep", metavar="DIR", help="results directory (default ./sweep)")
-    sweep.add_argument("--json", metavar="FILE", help="also write the table as JSON to FILE")
+    sweep.add_argument("--json", metavar="FILE", help="also write the table as JSON to FILE ('-': to standard "
+                       "output, the printed lines then go to standard error)")
     sweep.add_argument("--h5", action="store_true", help="write each run's HDF5 file to DIR/runs/")
     sweep.add_argument("--quiet", action="store_true", help="no progress output")
     _cluster_arguments(sweep, "default: a local cluster, one worker per core")
@@ -1306,7 +1388,8 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("--with", dest="other", choices=["exudyn"], default="exudyn",
                          help="the code to compare with (exudyn)")
     compare.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a scene parameter")
-    compare.add_argument("--json", metavar="FILE", help="write the comparison as JSON")
+    compare.add_argument("--json", metavar="FILE", help="write the comparison as JSON ('-': to standard output, "
+                         "the table then goes to standard error)")
     compare.add_argument("--quiet", action="store_true", help="no progress output")
     compare.set_defaults(func=cmd_compare)
     add_modes_parser(sub)

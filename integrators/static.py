@@ -37,6 +37,36 @@ class StepRecord:
     negative_eigenvalues: int | None = None
     critical: "CriticalPoint | None" = None
     load_compliance: float = float("nan")   # f . K^-1 f at the converged state (see :func:`stability`)
+    continuation: "ArcLengthState | None" = None   # arc length: what continues the path from this step
+
+
+@dataclass
+class ArcLengthState:
+    """What :func:`arc_length` carries from one converged step to the next, besides the state: enough to
+    continue the path from a saved step (a restart) as the uninterrupted run would.
+
+    ``load_factor``: lam of the converged step; ``arc_length``: the arc length Delta l of the next step
+    (after the step-length control); ``first_arc_length``: the first step's arc length, which the ratios
+    ``min_increment_ratio`` and ``max_increment_ratio`` refer to; ``direction``: the last step's increment
+    Delta q / scale, of unit length (the predictor follows it: its sign at a limit point); ``load_sign``: the
+    sign of the last step's load change (the predictor's sign when the tangent is orthogonal to
+    ``direction``). Lengths in units of the model size and radians (``model.dof_scale``).
+    """
+
+    load_factor: float
+    arc_length: float
+    first_arc_length: float
+    direction: np.ndarray
+    load_sign: float
+
+    def __post_init__(self) -> None:
+        self.direction = np.asarray(self.direction, dtype=float)
+        values = (self.load_factor, self.arc_length, self.first_arc_length, self.load_sign)
+        if not (all(np.isfinite(values)) and np.all(np.isfinite(self.direction))):
+            raise ValueError("arc-length continuation: non-finite load factor, arc length or direction")
+        if not (self.arc_length > 0 and self.first_arc_length > 0 and self.load_sign in (-1.0, 1.0)):
+            raise ValueError(f"arc-length continuation needs arc lengths > 0 and a load sign of +-1, got "
+                             f"{self.arc_length!r}, {self.first_arc_length!r} and {self.load_sign!r}")
 
 
 @dataclass
@@ -471,7 +501,8 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
                settings: NewtonSettings | None = None, min_increment_ratio: float = 1e-3,
                max_increment_ratio: float = 25.0, desired_iterations: int = 5,
                max_load_increment: float | None = None,
-               on_step: Callable | None = None, state=None, check_stability: bool = True) -> StaticResult:
+               on_step: Callable | None = None, state=None, check_stability: bool = True,
+               continuation: ArcLengthState | None = None) -> StaticResult:
     """Crisfield's cylindrical arc-length method: ||Delta q / scale|| = Delta l in each step.
 
     The first step's arc length follows from a load increment ``initial_increment``. Each iteration solves
@@ -499,6 +530,13 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
 
     ``check_stability`` as in :func:`load_control`: at a limit point the count of negative eigenvalues
     changes where the load factor turns.
+
+    ``continuation`` (with ``state``, the converged state of that step) continues a path from a converged
+    step (a restart): its load factor, next arc length, first arc length and the direction of its last step
+    (:class:`ArcLengthState`, recorded with every step as ``StepRecord.continuation``); ``max_steps`` then
+    counts the steps from there. The predictor of the first step is solved on a fresh tangent at the
+    state, where the uninterrupted run may use the factorization of the last iterate: the converged point
+    is again the intersection of the path with the arc, equal to the Newton tolerance.
     """
     settings = settings or NewtonSettings()
     if not (np.isfinite(lam_max) and lam_max > 0 and np.isfinite(initial_increment) and initial_increment > 0):
@@ -509,10 +547,14 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
     check_arc_length_options(max_steps=max_steps, min_increment_ratio=min_increment_ratio,
                              max_increment_ratio=max_increment_ratio, desired_iterations=desired_iterations)
     _check_support(model)
+    if continuation is not None and state is None:
+        raise ValueError("an arc-length continuation needs the converged state of its step")
     state = model.initial_state() if state is None else state
     solver, stats = LinearSolver(), NewtonStats(iteration="mixed" if _mixed(model, settings) else "displacement")
     records: list[StepRecord] = []
     t0, lam, cutbacks, attempts = time.perf_counter(), 0.0, 0, 0
+    if continuation is not None:
+        lam = float(continuation.load_factor)
     tracker = _StabilityTracker(model, state, lam, check_stability)
 
     def stop(trial_lam, residuals, reason, non_finite=False):
@@ -521,23 +563,31 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
         return StaticResult(state, lam, records, stats, False, _failure_message(failure),
                             time.perf_counter() - t0, cutbacks, failure)
 
-    try:
-        r, K = model.residual_and_tangent(state, 0.0)
-        stats.tangent_updates += 1
-        stats.residual_evaluations += 1
-        solver.factorize(K)
-        stats.factorizations += 1
-        held_lag = 0.0                 # distance of the state from the factorization held (scaled increments)
-        f0 = model.external_force(state)
-        dq_f = solver.solve(f0)
-    except FloatingPointError as exc:
-        return stop(0.0, [], f"non-finite values in the initial state or loads: {exc}", True)
-    if not np.any(f0):
-        raise ValueError("arc-length needs a nonzero external load (the external force vector is zero)")
-    dl = initial_increment * _scaled_norm(model, dq_f)    # arc lengths in units of the model size and radians
-    dl0 = dl
-    prev_dir = dq_f / model.dof_scale / _scaled_norm(model, dq_f)
-    prev_dlam_sign = 1.0
+    if continuation is not None:
+        if continuation.direction.shape != (len(model.dof_scale),):
+            raise ValueError(f"arc-length continuation: its direction has {continuation.direction.size} "
+                             f"components, the model {len(model.dof_scale)} DoFs")
+        held_lag = float("inf")        # no factorization held: the first predictor on a fresh tangent
+        dl, dl0 = float(continuation.arc_length), float(continuation.first_arc_length)
+        prev_dir, prev_dlam_sign = continuation.direction.copy(), float(continuation.load_sign)
+    else:
+        try:
+            r, K = model.residual_and_tangent(state, 0.0)
+            stats.tangent_updates += 1
+            stats.residual_evaluations += 1
+            solver.factorize(K)
+            stats.factorizations += 1
+            held_lag = 0.0             # distance of the state from the factorization held (scaled increments)
+            f0 = model.external_force(state)
+            dq_f = solver.solve(f0)
+        except FloatingPointError as exc:
+            return stop(0.0, [], f"non-finite values in the initial state or loads: {exc}", True)
+        if not np.any(f0):
+            raise ValueError("arc-length needs a nonzero external load (the external force vector is zero)")
+        dl = initial_increment * _scaled_norm(model, dq_f)    # arc lengths in units of the model size and radians
+        dl0 = dl
+        prev_dir = dq_f / model.dof_scale / _scaled_norm(model, dq_f)
+        prev_dlam_sign = 1.0
 
     for _ in range(max_steps):
         attempts += 1
@@ -636,6 +686,7 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
             if out.converged:
                 rec = tracker.record(len(records) + 1, state_end, lam_max, out.iterations, out.residuals,
                                      time.perf_counter() - t0)
+                rec.continuation = ArcLengthState(lam_max, dl, dl0, prev_dir.copy(), prev_dlam_sign)
                 records.append(rec)
                 if on_step is not None:
                     on_step(rec, state_end)
@@ -652,11 +703,12 @@ def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, 
         prev_dlam_sign = np.sign(trial_lam - lam) or prev_dlam_sign
         state, lam = trial, trial_lam
         rec = tracker.record(len(records) + 1, state, lam, it, residuals, time.perf_counter() - t0)
+        dl *= float(np.clip(np.sqrt(desired_iterations / max(it, 1)), 0.5, 2.0))
+        dl = min(dl, max_increment_ratio * dl0)
+        rec.continuation = ArcLengthState(lam, dl, dl0, prev_dir.copy(), prev_dlam_sign)
         records.append(rec)
         if on_step is not None:
             on_step(rec, state)
-        dl *= float(np.clip(np.sqrt(desired_iterations / max(it, 1)), 0.5, 2.0))
-        dl = min(dl, max_increment_ratio * dl0)
     return StaticResult(state, lam, records, stats, False,
                         f"arc-length reached max_steps={max_steps} at load factor {lam:.6g}",
                         time.perf_counter() - t0, cutbacks)

@@ -23,3 +23,11 @@ def small_disk(tmp_path):
     mount_small_disk(path)
     yield path
     unmount(path)
+
+
+@pytest.fixture
+def terminal_stderr(monkeypatch):
+    """``flexbody run`` prints its step lines only when stderr is a terminal: tests that read them from the
+    captured (not a terminal) stderr pretend it is one."""
+    import flexbody.cli
+    monkeypatch.setattr(flexbody.cli, "_stderr_is_terminal", lambda: True)

@@ -132,7 +132,7 @@ def test_a_run_without_rerun_never_imports_it(tmp_path):
     assert read_hdf5(tmp_path / "a.h5")["step"].tolist() == [1, 2]
 
 
-def test_progress_goes_to_stderr_and_quiet_silences_it(capsys):
+def test_progress_goes_to_stderr_and_quiet_silences_it(capsys, terminal_stderr):
     assert main(["run", "cantilever_end_shear", *SMALL]) == 0
     captured = capsys.readouterr()
     progress = [line for line in captured.err.splitlines() if "load factor" in line]

@@ -63,7 +63,7 @@ def test_progress_clock_starts_when_the_kernels_are_ready(capsys):
 
 
 @pytest.mark.parametrize("scene", [STATIC, DYNAMIC], ids=["static", "dynamic"])
-def test_run_reports_setup_compile_and_solve_times(tmp_path, capsys, scene):
+def test_run_reports_setup_compile_and_solve_times(tmp_path, capsys, terminal_stderr, scene):
     path = tmp_path / "run.json"
     t0 = time.perf_counter()
     assert main(["run", *scene, "--json", str(path)]) == 0

@@ -165,7 +165,8 @@ class RunRecorder:
                 from flexbody.outputs.restart import restart_field_shapes
                 stats = DEFAULT_STATS + (DYNAMIC_STATS if self.kind == "dynamic" else STATIC_STATS)
                 n, m = mesh.n_nodes, mesh.n_elements
-                fields = restart_field_shapes(n, scene.model.n_dof, self.kind == "dynamic")
+                arc = getattr(scene.analysis, "method", None) == "arc_length"
+                fields = restart_field_shapes(n, scene.model.n_dof, self.kind == "dynamic", arc)
                 if self.kind == "dynamic":
                     fields.update({name: (n, 3) for name in MOTION_FIELDS})
                 if self.stresses:
@@ -264,6 +265,10 @@ class RunRecorder:
         if self.kind == "dynamic" and motion is not None:
             fields.update({"restart_v": motion["v"], "restart_vdot": motion["vdot"], "restart_a": motion["a"]})
             fields.update({k: motion[k] for k in MOTION_FIELDS if k in motion})
+        continuation = getattr(rec, "continuation", None)
+        if continuation is not None:
+            from flexbody.outputs.restart import arc_length_fields
+            fields.update(arc_length_fields(continuation))
         if self.stresses:
             from flexbody.outputs.fields import load_level, stress_field_values
             fields.update(stress_field_values(self.scene.model, state, load_level(self.scene, where), self._gravity))

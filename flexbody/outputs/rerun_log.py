@@ -38,7 +38,9 @@ Entity paths
 Blueprint
     The 3D view of ``body`` takes three quarters of the window; beside it one plot per tracked output with
     its reference overlaid (``outputs/<name>`` and ``reference/<name>``), and for a dynamic run a plot of the
-    energies and one of the energy drift (:func:`blueprint`).
+    energies and one of the energy drift (:func:`blueprint`); every plot shows the whole run on its x axis.
+    The legend (``body/legend``) above the plots starts with the step's load factor or time and the colour
+    scale.
 
 The recording is locked against a second writer (:mod:`flexbody.outputs.files`), and a step that the disk
 cannot hold is refused before anything of it is logged (:class:`flexbody.outputs.files.DiskFullError`):
@@ -101,21 +103,27 @@ def blueprint(outputs, kind: str = "static", references=()):
     reference overlaid, and for a dynamic run the energies and their drift."""
     import rerun as rr
     import rerun.blueprint as rrb
+    everything = rrb.TimeRangeBoundary.infinite()
+
+    def plot(name: str, contents: list[str]):
+        # the whole path on the x axis (the viewer's default on the load-factor timeline is a window of a few
+        # thousand millionths around the cursor: the curve looked like a point)
+        return rrb.TimeSeriesView(name=name, origin="/", contents=contents,
+                                  axis_x=rrb.TimeAxis(view_range=rr.TimeRange(start=everything, end=everything)))
+
     plots = []
     for name in outputs:
         part = rr.escape_entity_path_part(str(name))
         contents = [f"/outputs/{part}"] + ([f"/reference/{part}"] if name in references else [])
-        plots.append(rrb.TimeSeriesView(name=str(name), origin="/", contents=contents))
+        plots.append(plot(str(name), contents))
     if kind == "dynamic":
-        plots.append(rrb.TimeSeriesView(name="energies", origin="/",
-                                        contents=[f"/stats/{k}" for k in ENERGY_STATS]))
-        plots.append(rrb.TimeSeriesView(name="energy drift", origin="/",
-                                        contents=[f"/stats/{k}" for k in DRIFT_STATS]))
+        plots.append(plot("energies", [f"/stats/{k}" for k in ENERGY_STATS]))
+        plots.append(plot("energy drift", [f"/stats/{k}" for k in DRIFT_STATS]))
     else:
-        plots.append(rrb.TimeSeriesView(name="load factor", origin="/", contents=["/stats/load_factor"]))
+        plots.append(plot("load factor", ["/stats/load_factor"]))
     view = rrb.Spatial3DView(name="body", origin="/body")
     side = rrb.Vertical(rrb.TextDocumentView(name="legend", origin="/body/legend"), *plots,
-                        row_shares=[1] + [2] * len(plots))
+                        row_shares=[1.5] + [2] * len(plots))
     return rrb.Blueprint(rrb.Horizontal(view, side, column_shares=[3, 1]), collapse_panels=True)
 
 
@@ -305,9 +313,9 @@ class RerunLogger:
             where = (f"load factor {load_factor_or_time:.6g}" if self.kind == "static"
                      else f"time {load_factor_or_time:.6g} s")
             rec.log("body/legend", rr.TextDocument(
-                f"**{where}**\n\ncolour: {COLOR_TEXT[self.color_by]}\n\n"
-                f"scale: {vmin:.4g} (dark purple) .. {vmax:.4g} (yellow), fixed\n\n"
-                f"largest now: {float(values.max()) if values.size else 0.0:.4g}", media_type="text/markdown"))
+                f"**{where}**\n\nscale: {vmin:.4g} (dark purple) .. {vmax:.4g} (yellow), fixed; largest now "
+                f"{float(values.max()) if values.size else 0.0:.4g}\n\ncolour: {COLOR_TEXT[self.color_by]}",
+                media_type="text/markdown"))
         rec.log("body/mesh", rr.Mesh3D.from_fields(vertex_positions=x, vertex_normals=d, vertex_colors=colors))
         if self.directors:
             rec.log("body/directors", rr.Arrows3D(origins=x, vectors=self.arrow_length * d))

@@ -158,7 +158,8 @@ class DynamicAnalysis:
 class RestartPoint:
     """A saved step to continue a run from (:func:`flexbody.outputs.restart.read_restart`): its step number,
     load factor (static) or time (dynamic), the state, and for a dynamic run the free-DoF velocity v,
-    acceleration vdot and generalized-alpha pseudo-acceleration a, and the work dissipated until then."""
+    acceleration vdot and generalized-alpha pseudo-acceleration a, and the work dissipated until then; for an
+    arc-length path the :class:`integrators.static.ArcLengthState` of the step (``continuation``)."""
 
     step: int
     where: float
@@ -167,3 +168,4 @@ class RestartPoint:
     vdot: np.ndarray | None = None
     a: np.ndarray | None = None
     dissipated_energy: float = 0.0
+    continuation: object | None = None

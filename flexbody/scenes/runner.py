@@ -9,6 +9,7 @@ reference (:func:`flexbody.scenes.compare.compare`).
 
 from __future__ import annotations
 
+import inspect
 import time
 from typing import TYPE_CHECKING, Callable, Protocol
 
@@ -22,6 +23,8 @@ from integrators.static import arc_length, load_control
 
 if TYPE_CHECKING:
     from flexbody.scenes.scene import Scene
+
+_ARC_MAX_STEPS = inspect.signature(arc_length).parameters["max_steps"].default
 
 
 class SceneRun(Protocol):
@@ -43,8 +46,9 @@ class StaticRun:
     """A static scene's run: load control to the listed load factors, or arc length.
 
     ``on_step(record, state, history)`` and ``progress(record)`` are called after every converged step;
-    ``restart`` continues a load-control path from its load factor to the levels beyond it (steps numbered on
-    from the saved one; the history starts after it).
+    ``restart`` continues a load-control path from its load factor to the levels beyond it, an arc-length path
+    from its continuation through the remaining ``max_steps`` (steps numbered on from the saved one; the
+    history starts after it).
     """
 
     threads = None
@@ -61,6 +65,8 @@ class StaticRun:
     def record(self, rec, state) -> None:
         if self.restart is not None:
             rec.step += self.restart.step
+            if getattr(rec, "critical", None) is not None:
+                rec.critical.step += self.restart.step
         self.history["load_factor"].append(rec.load_factor)
         for out in self.scene.outputs:
             self.history[out.name].append(out.value(self.scene.model, state))
@@ -71,9 +77,22 @@ class StaticRun:
 
     def solve(self, t0: float):
         model, a, restart = self.scene.model, self.analysis, self.restart
+        if restart is not None and a.method == "arc_length":
+            if restart.continuation is None:
+                raise ValueError("an arc-length restart needs the continuation of its step (arc length, direction)")
+            if restart.where >= max(a.load_factors):
+                raise ValueError(f"restart at load factor {restart.where:g}: the path ended there (the scene "
+                                 f"goes to {max(a.load_factors):g})")
+            options = dict(a.arc_options)
+            max_steps = options.pop("max_steps", _ARC_MAX_STEPS) - restart.step
+            if max_steps < 1:
+                raise ValueError(f"restart at step {restart.step}: the scene's max_steps "
+                                 f"{max_steps + restart.step} are used up")
+            return arc_length(model, lam_max=max(a.load_factors), initial_increment=a.arc_increment,
+                              max_load_increment=a.max_load_increment, settings=a.newton, on_step=self.record,
+                              check_stability=a.stability, state=restart.state,
+                              continuation=restart.continuation, max_steps=max_steps, **options)
         if restart is not None:
-            if a.method != "load_control":
-                raise ValueError("a restart continues a load-control path only (this scene uses arc length)")
             levels = [lf for lf in a.load_factors if lf > restart.where + level_tolerance(np.asarray(a.load_factors))]
             if not levels:
                 raise ValueError(f"restart at load factor {restart.where:g}: no load level of the scene lies beyond it")
@@ -112,8 +131,8 @@ def run_scene(scene: Scene, on_step: Callable | None = None, progress: Callable 
     started : the ``time.perf_counter()`` reading when the set-up began (e.g. before building the scene);
         default: the call
     restart : continue from a saved step (:class:`RestartPoint`): a dynamic run from its time step, a static
-        load-control path from its load factor to the levels beyond it (steps numbered on from the saved
-        one); the history starts at the saved step (dynamic) or after it (static)
+        load-control path from its load factor to the levels beyond it, an arc-length path from its
+        continuation (the remaining ``max_steps``; steps numbered on from the saved one); the history starts at the saved step (dynamic) or after it (static)
 
     Returns
     -------

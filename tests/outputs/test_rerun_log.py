@@ -176,6 +176,12 @@ def test_blueprint_legend_energies_and_a_fixed_colour_scale(tmp_path):
 
     assert isinstance(blueprint(["W_A"], "static", ("W_A",)), rrb.Blueprint)
     assert isinstance(blueprint(["u"], "dynamic"), rrb.Blueprint)
+    for kind, count in (("static", 2), ("dynamic", 3)):     # every plot shows the whole run on its x axis
+        side = blueprint(["u"], kind).root_container.contents[1]
+        plots = [v for v in side.contents if isinstance(v, rrb.TimeSeriesView)]
+        assert len(plots) == count
+        assert all(v.properties["TimeAxis"].view_range.as_arrow_array().to_pylist() == [{"start": None, "end": None}]
+                   for v in plots)
     mesh, path = square_mesh(), tmp_path / "bp.rrd"
     ref = {"W_A": ([0.5, 1.0], [1.0, 2.0])}
     sts = states(mesh, 3)
@@ -186,6 +192,7 @@ def test_blueprint_legend_energies_and_a_fixed_colour_scale(tmp_path):
     chunks = read_chunks(path)
     legend = column(chunks["/body/legend"], "TextDocument:text", static=False)
     assert len(legend) == 3 and "load factor 0.75" in legend[2][0] and "without the rigid motion" in legend[0][0]
+    assert legend[0][0].index("scale:") < legend[0][0].index("colour:")   # the scale first, in view
     top = [float(t[0].split(" .. ")[1].split()[0]) for t in legend]
     assert top[0] <= top[1] == top[2] > 0                    # the scale grows, never shrinks
     assert column(chunks["/stats/load_factor"], "Scalars:scalars", static=False) == [[0.25], [0.5], [0.75]]

@@ -52,7 +52,7 @@ def test_dynamic_run_json_has_the_summary_keys(tmp_path):
     assert len(d["energy_history"]["time"]) == d["steps"] + 1 == len(d["energy_history"]["strain"])
 
 
-def test_progress_shows_time_and_iterations(capsys):
+def test_progress_shows_time_and_iterations(capsys, terminal_stderr):
     assert main(["run", "spinning_plate", "--set", "nx=1", "--set", "ny=1", "--set", "end_time=0.01"]) == 0
     captured = capsys.readouterr()
     lines = [line for line in captured.err.splitlines() if " time " in line]
