@@ -121,7 +121,7 @@ def read_restart(spec: str, scene):
 def _arc_length_point(path: str, step: int, lam: float, state, f: dict, n_dof: int):
     """The restart point of an arc-length path: the state and the continuation of the saved step."""
     from integrators.static import ArcLengthState
-    from flexbody.scenes.scene import RestartPoint
+    from flexbody.scenes.analysis import RestartPoint
     direction = f["restart_arc_direction"]
     if direction.shape != (n_dof,):
         raise RestartError(f"--restart file {path!r} was written for other supports ({direction.size} free "
