@@ -4,7 +4,9 @@ Each builder takes the mesh density and the physical parameters as keyword argum
 ``--set``) can refine the mesh or change the thickness without touching the package. The dynamic scenes
 (``spinning_plate``, ``spinning_membrane``, ``spinning_sail``, ``tumbling_plate``, ``swinging_strip``, listed
 in ``DYNAMIC``) also take the time step ``dt``, the end time ``end_time``, ``rho_inf``, the iteration-matrix
-``policy``, ``output_every`` and ``adaptive`` (error-controlled time steps, docs/dynamics.md).
+``policy``, ``output_every`` and ``adaptive`` (error-controlled time steps, docs/dynamics.md). The benchmarks
+and ``swinging_strip`` take the element variant as ``tying``, the scene files' key (true, false, "mean",
+"point", "mitc7": :func:`flexbody.shell.variants.variant_from_key`).
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from flexbody.scenes.reference import read_reference_csv
 from flexbody.scenes.scene import (AngularVelocity, DynamicAnalysis, Output, RadialDisplacement, Reference, Scene,
                                    StaticAnalysis, kernel_threads)
 from flexbody.shell.material import ShellMaterial
+from flexbody.shell.variants import variant_from_key
 from integrators.newton import NewtonSettings
 
 
@@ -44,7 +47,7 @@ def cantilever_end_moment(nx: int = 16, ny: int = 1, thickness: float = 0.01, st
     L, b, E = 12.0, 1.0, 1.2e6
     mesh = generators.strip(L, b, nx, ny, diagonal)
     mat = ShellMaterial(E, 0.0, thickness)
-    body = ShellBody(mesh, mat, tying=tying, kernel=kernel)
+    body = ShellBody(mesh, mat, element=variant_from_key(tying), kernel=kernel)
     m_max = 2 * math.pi * E * b * thickness**3 / 12 / L
     moments = nodal_vectors_from_edges(mesh.nodes, mesh.edge_set("tip"), np.array([0.0, -m_max / b, 0.0]),
                                        mesh.n_nodes)
@@ -69,7 +72,7 @@ def cantilever_end_shear(nx: int = 16, ny: int = 1, thickness: float = 0.1, step
     """Strip L=10, b=1, h=0.1, E=1.2e6, nu=0, clamped, end shear force P_max = 4 (Sze 3.1)."""
     L, b, E = 10.0, 1.0, 1.2e6
     mesh = generators.strip(L, b, nx, ny)
-    body = ShellBody(mesh, ShellMaterial(E, 0.0, thickness), tying=tying, kernel=kernel)
+    body = ShellBody(mesh, ShellMaterial(E, 0.0, thickness), element=variant_from_key(tying), kernel=kernel)
     p_max = 4.0 * (thickness / 0.1) ** 3
     forces = nodal_vectors_from_edges(mesh.nodes, mesh.edge_set("tip"), np.array([0, 0, p_max / b]), mesh.n_nodes)
     model = Model(body, [Fix(mesh.node_set("clamped"), "all")], _loads_from_nodal(forces))
@@ -87,7 +90,7 @@ def slit_annular_plate(n_radial: int = 10, n_circ: int = 30, thickness: float = 
                        tying: bool = True, kernel: str = "numba") -> Scene:
     """Slit annular plate Ri=6, Ro=10, E=21e6, nu=0, line force q_max=0.8 on one slit edge (Sze 3.3)."""
     mesh = generators.slit_annulus(6.0, 10.0, n_radial, n_circ)
-    body = ShellBody(mesh, ShellMaterial(21e6, 0.0, thickness), tying=tying, kernel=kernel)
+    body = ShellBody(mesh, ShellMaterial(21e6, 0.0, thickness), element=variant_from_key(tying), kernel=kernel)
     q = 0.8 * (thickness / 0.03) ** 3
     forces = nodal_vectors_from_edges(mesh.nodes, mesh.edge_set("loaded"), np.array([0, 0, q]), mesh.n_nodes)
     model = Model(body, [Fix(mesh.node_set("clamped"), "all")], _loads_from_nodal(forces))
@@ -107,7 +110,7 @@ def pullout_cylinder(n_circ: int = 12, n_axial: int = 8, thickness: float = 0.09
     """Open cylinder pulled by two radial forces at mid-length, octant model (Sze 3.5): snap near 0.5 P_max."""
     R, L = 4.953, 10.35
     mesh = generators.cylinder(R, L / 2, n_circ, n_axial, angle=math.pi / 2)
-    body = ShellBody(mesh, ShellMaterial(10.5e6, 0.3125, thickness), tying=tying, kernel=kernel)
+    body = ShellBody(mesh, ShellMaterial(10.5e6, 0.3125, thickness), element=variant_from_key(tying), kernel=kernel)
     x = mesh.nodes
     on = lambda mask: np.flatnonzero(mask)
     tol = 1e-8 * R
@@ -131,7 +134,7 @@ def hemisphere(n_meridian: int = 20, n_circ: int = 20, thickness: float = 0.04, 
     """Hemisphere with an 18 deg hole, quarter model, alternating radial forces at the equator (Sze 3.4)."""
     R = 10.0
     mesh = generators.spherical_cap(R, 18.0, n_meridian, n_circ, angle=math.pi / 2)
-    body = ShellBody(mesh, ShellMaterial(6.825e7, 0.3, thickness), tying=tying, kernel=kernel)
+    body = ShellBody(mesh, ShellMaterial(6.825e7, 0.3, thickness), element=variant_from_key(tying), kernel=kernel)
     x = mesh.nodes
     tol = 1e-8 * R
     pulled = mesh.nearest_node([R, 0, 0])
@@ -343,7 +346,8 @@ def swinging_strip(nx: int = 16, ny: int = 1, thickness: float = 0.01, young: fl
     from integrators.generalized_alpha import AlphaSettings
     L, b, rho, g = 1.0, 0.1, 7850.0, 9.81
     mesh = generators.strip(L, b, nx, ny)
-    model = Model(ShellBody(mesh, ShellMaterial(young, 0.0, thickness, density=rho), tying=tying),
+    model = Model(ShellBody(mesh, ShellMaterial(young, 0.0, thickness, density=rho),
+                            element=variant_from_key(tying)),
                   [Fix(mesh.node_set("clamped"), "all")])
     tip = mesh.nearest_node([L, b / 2, 0.0])
     analysis = DynamicAnalysis(dt, end_time, rho_inf, policy, output_every, gravity=(0.0, 0.0, -g),

@@ -51,7 +51,7 @@ import numpy as np
 
 from flexbody.scenes.scene import (AngularVelocity, DynamicAnalysis, Output, RadialDisplacement, Reference, Scene,
                                    StaticAnalysis)
-from flexbody.shell.element_reference import TYING_NAMES
+from flexbody.shell.variants import VARIANT_KEYS, variant_from_key
 
 
 class SceneError(ValueError):
@@ -910,10 +910,10 @@ def scene_from_document(doc: dict, path: str | Path) -> Scene:
     et = top.table("element", {})
     tying = et.raw("tying", True)
     if not isinstance(tying, bool):
-        tying = et.string("tying", True, choices=TYING_NAMES)
+        tying = et.string("tying", True, choices=VARIANT_KEYS)
     kernel = et.string("kernel", "numba", choices=("numba", "reference"))
     et.done(_ELEMENT_KEYS)
-    body = _wrap(where, "element", ShellBody, mesh, material, tying=tying, kernel=kernel)
+    body = _wrap(where, "element", ShellBody, mesh, material, element=variant_from_key(tying), kernel=kernel)
     constraints = _build_bcs(top.tables("bc"), mesh)
     dynamic = _analysis_type(doc, where) == "dynamic"
     loads, load_groups, load_functions = _build_timed_loads(top.tables("load"), mesh, dynamic)
