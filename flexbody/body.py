@@ -130,6 +130,9 @@ class ShellBody:
             key = self.element if tying is None else tying
             if tying is not None and self.element != MITC6():
                 raise ValueError(f"give the element variant once: element={self.element!r} and tying={tying!r}")
+            if tying is None and not isinstance(key, (bool, np.bool_, str)):
+                raise TypeError("element must be an element variant of flexbody.shell.variants (MITC6(), "
+                                f"MITC6(membrane='point'), MITC7(), NoTying()), got {key!r}")
             self.element = variant_from_key(key)
             warnings.warn(f"ShellBody(tying={key!r}) is deprecated: pass element={self.element!r} "
                           "(flexbody.shell.variants)", DeprecationWarning, stacklevel=3)

@@ -107,7 +107,9 @@ def test_the_new_keyword_does_not_warn_and_bad_values_fail_in_one_line():
     with pytest.raises(ValueError, match="tying must be true, false or one of 'mean', 'point', 'mitc7', got 'x'"):
         ShellBody(MESH, MATERIAL, tying="x")
     with pytest.raises(ValueError, match="tying must be .* got 'mitc7 '"):
-        ShellBody(MESH, MATERIAL, element="mitc7 ")
+        ShellBody(MESH, MATERIAL, element="mitc7 ")                        # a (deprecated) scene key
+    with pytest.raises(TypeError, match=r"element must be an element variant .*MITC7\(\), NoTying\(\)\), got 7"):
+        ShellBody(MESH, MATERIAL, element=7)
     with pytest.raises(ValueError, match=r"give the element variant once: element=MITC7\(\) and tying='point'"):
         ShellBody(MESH, MATERIAL, element=MITC7(), tying="point")
 
