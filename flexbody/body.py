@@ -108,7 +108,8 @@ class ShellBody:
     frame_axis : axis projected onto the tangent planes to orient the nodal frames (default: automatic)
     kernel : "numba" (fast) or "reference" (the readable numpy element)
     tying : deprecated, the scene files' key for the element (True, False, "mean", "point", "mitc7"):
-        mapped by :func:`flexbody.shell.variants.variant_from_key`, with a DeprecationWarning
+        mapped by :func:`flexbody.shell.variants.variant_from_key`, with a DeprecationWarning. An init-only
+        argument: the body keeps ``element`` (``element.key`` is the scene key)
     """
 
     mesh: Tri6Mesh
@@ -256,17 +257,6 @@ class ShellBody:
         if strain_kernel not in ("numba", "reference"):
             raise ValueError(f"strain_kernel must be 'numba' or 'reference', got {strain_kernel!r}")
         return self.element.strain_energy(self._batch(state), strain_kernel)
-
-
-def _deprecated_tying(body: ShellBody) -> bool | str:
-    """Deprecated: the scene-file key of the element variant; use ``body.element`` (``body.element.key``)."""
-    warnings.warn("ShellBody.tying is deprecated: use ShellBody.element (flexbody.shell.variants)",
-                  DeprecationWarning, stacklevel=2)
-    return body.element.key
-
-
-# the keyword ``tying`` is an init-only argument; reading it still answers, for one release
-ShellBody.tying = property(_deprecated_tying)
 
 
 def update_state(state: ShellState, du: np.ndarray, dtheta: np.ndarray,

@@ -1,6 +1,8 @@
 """Element variants as objects (flexbody.shell.variants): the scene keys, the deprecated ``tying`` keyword,
 capabilities, maps built once, and the body dispatching through the variant."""
 
+import copy
+import dataclasses
 import pickle
 import warnings
 
@@ -88,8 +90,6 @@ def test_deprecated_tying_keyword_maps_to_the_variant(variant):
     with pytest.warns(DeprecationWarning):
         positional = ShellBody(MESH, MATERIAL, variant.key)                # the old third positional argument
     assert positional.element == variant
-    with pytest.warns(DeprecationWarning, match="ShellBody.tying is deprecated"):
-        assert old.tying == variant.key
     new = ShellBody(MESH, MATERIAL, element=variant)
     state = deformed_state(new, np.random.default_rng(2), amplitude=0.02, rot=0.2)
     f0, K0 = new.element_forces(state)
@@ -137,6 +137,15 @@ def test_dynamic_strain_energy_goes_through_the_variant(variant):
     assert body.strain_energy(body.initial_state(), strain_kernel="numba") < 1e-20 * numpy_energy
     with pytest.raises(ValueError, match="strain_kernel must be 'numba' or 'reference', got 'fast'"):
         body.strain_energy(state, strain_kernel="fast")
+
+
+def test_bodies_copy_replace_and_pickle():
+    body = ShellBody(MESH, MATERIAL, element=MITC7())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert dataclasses.replace(body, kernel="reference").element == MITC7()
+    assert copy.deepcopy(body).element == MITC7()
+    assert pickle.loads(pickle.dumps(body)).element_name == "MITC7"
 
 
 def test_mitc7_bubbles_are_the_bodys_own():
