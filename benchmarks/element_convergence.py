@@ -25,8 +25,9 @@ from flexbody.constraints import Fix
 from flexbody.loads import NodalLoad, nodal_vectors_from_area, nodal_vectors_from_edges
 from flexbody.mesh import generators
 from flexbody.shell.material import ShellMaterial
+from flexbody.shell.variants import MITC6, MITC7
 
-VARIANTS = {"MITC6": dict(tying=True, kernel="numba"), "MITC7": dict(tying="mitc7", kernel="numba")}
+VARIANTS = {"MITC6": dict(element=MITC6(), kernel="numba"), "MITC7": dict(element=MITC7(), kernel="numba")}
 
 
 def linear_solution(model: Model):

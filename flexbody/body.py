@@ -6,16 +6,17 @@ A ``ShellBody`` evaluates the element internal forces and tangents in the nodal 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import warnings
+from dataclasses import InitVar, dataclass, field
 
 import numpy as np
 
 from flexbody.frames import frames_from_directors
 from flexbody.lie import kernels
 from flexbody.mesh import Tri6Mesh
-from flexbody.shell.element_reference import assumed_strain_maps
 from flexbody.shell.geometry import N_GAUSS, element_geometry_batch
 from flexbody.shell.material import ShellMaterial
+from flexbody.shell.variants import MITC6, ElementBatch, ElementVariant, variant_from_key
 
 
 @dataclass
@@ -100,45 +101,55 @@ class ShellBody:
     ----------
     mesh : the six-node triangle mesh (reference configuration)
     material : section properties
-    tying : MITC6 assumed strains (True, or a membrane scheme "mean"/"point"), "mitc7" (MITC6 plus a
-        condensed rotation bubble and the canonical shear tying, :mod:`flexbody.shell.bubble`: converges
-        faster in bending, costs more per element) or plain displacement-based strains (False, locks)
+    element : the element variant (:mod:`flexbody.shell.variants`): ``MITC6()`` (default; or
+        ``MITC6(membrane="point")``), ``MITC7()`` (MITC6 plus a condensed rotation bubble and the canonical
+        shear tying: converges faster in bending, costs more per element) or ``NoTying()``
+        (displacement-based strains, locks)
     frame_axis : axis projected onto the tangent planes to orient the nodal frames (default: automatic)
     kernel : "numba" (fast) or "reference" (the readable numpy element)
+    tying : deprecated, the scene files' key for the element (True, False, "mean", "point", "mitc7"):
+        mapped by :func:`flexbody.shell.variants.variant_from_key`, with a DeprecationWarning. An init-only
+        argument: the body keeps ``element`` (``element.key`` is the scene key)
     """
 
     mesh: Tri6Mesh
     material: ShellMaterial
-    tying: bool | str = True
+    element: ElementVariant = MITC6()
     frame_axis: np.ndarray | None = None
     kernel: str = "numba"
+    tying: InitVar[bool | str | None] = None
     frames0: np.ndarray = field(init=False)
     reference: ReferenceGeometry = field(init=False, repr=False)
     origin: np.ndarray = field(init=False)   # the model origin of the computation (:func:`model_origin`)
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, tying: bool | str | None) -> None:
         if not isinstance(self.mesh, Tri6Mesh):
             raise TypeError(f"mesh must be a Tri6Mesh, got {type(self.mesh).__name__}")
         if not isinstance(self.material, ShellMaterial):
             raise TypeError(f"material must be a ShellMaterial, got {type(self.material).__name__}")
+        if tying is not None or not isinstance(self.element, ElementVariant):
+            key = self.element if tying is None else tying
+            if tying is not None and self.element != MITC6():
+                raise ValueError(f"give the element variant once: element={self.element!r} and tying={tying!r}")
+            if tying is None and not isinstance(key, (bool, np.bool_, str)):
+                raise TypeError("element must be an element variant of flexbody.shell.variants (MITC6(), "
+                                f"MITC6(membrane='point'), MITC7(), NoTying()), got {key!r}")
+            self.element = variant_from_key(key)
+            warnings.warn(f"ShellBody(tying={key!r}) is deprecated: pass element={self.element!r} "
+                          "(flexbody.shell.variants)", DeprecationWarning, stacklevel=3)
         if self.kernel not in ("numba", "reference"):
             raise ValueError(f"kernel must be 'numba' or 'reference', got {self.kernel!r}")
         self.frames0 = frames_from_directors(self.mesh.directors, self.frame_axis)
         self.origin = model_origin(self.mesh.nodes)
         self.reference = build_reference(self.mesh, self.frames0, self.origin)
-        self._maps = assumed_strain_maps(self.tying)
-        # MITC7: the condensed rotation bubbles of the last evaluation, the warm start of the next one
-        # (the results do not depend on it beyond the bubble tolerance, flexbody.shell.bubble)
-        self._bubbles = np.zeros((self.mesh.n_elements, 2)) if self.tying == "mitc7" else None
+        # the variant's per-element state (MITC7: the condensed bubbles of the last evaluation, the warm start
+        # of the next one; the results do not depend on it beyond the bubble tolerance, flexbody.shell.bubble)
+        self._element_state = self.element.element_state(self.mesh.n_elements)
 
     @property
     def element_name(self) -> str:
         """The element variant, for reports: "MITC6", "MITC6 (point membrane tying)", "MITC7" or "no tying"."""
-        if self.tying == "mitc7":
-            return "MITC7"
-        if not self.tying:
-            return "no tying"
-        return "MITC6" if self.tying in (True, "mean") else f"MITC6 ({self.tying} membrane tying)"
+        return self.element.name
 
     def set_reference_frames(self, nodes: np.ndarray, frames: np.ndarray) -> None:
         """Override reference frames of some nodes (e.g. to align with a symmetry plane) and rebuild."""
@@ -160,27 +171,11 @@ class ShellBody:
     def supports_mixed_iteration(self) -> bool:
         """Whether the mixed Newton iteration (independent Gauss-point stresses) is available: the MITC6
         variants; MITC7 condenses its bubble against the strains' own stresses."""
-        return self.tying != "mitc7"
+        return self.element.supports_mixed_iteration
 
     def element_forces(self, state: ShellState, want_tangent: bool = True):
         """Element internal forces (m, 36) and tangents (m, 36, 36) in the nodal local frames."""
-        x_el, fr_el, C, ref = self._element_arrays(state)
-        if self.tying == "mitc7":
-            return self._bubble_element_forces(x_el, fr_el, C, want_tangent)
-        if self.kernel == "numba":
-            from flexbody.shell.element import internal_force_tangent_batch
-            return internal_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C,
-                                                self._maps, want_tangent)
-        from flexbody.shell.element_reference import force_tangent
-        m = len(x_el)
-        f = np.zeros((m, 36))
-        K = np.zeros((m, 36, 36)) if want_tangent else None
-        for e in range(m):
-            fe, Ke = force_tangent(x_el[e], fr_el[e], self._geometry(e), C, self._maps)
-            f[e] = fe
-            if want_tangent:
-                K[e] = Ke
-        return f, K
+        return self.element.forces(self._batch(state), want_tangent)
 
     def mixed_element_forces(self, state: ShellState,
                              stress: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -188,47 +183,33 @@ class ShellBody:
         the internal forces of the strains f (m, 36), the iteration matrices K (m, 36, 36), whose
         geometric terms carry the given stresses, and the forces of these stresses f_stress (m, 36)
         (:func:`flexbody.shell.element_reference.force_tangent`). MITC6 variants only."""
-        if not self.supports_mixed_iteration:
-            raise ValueError("the mixed Newton iteration is not available for tying='mitc7'")
-        x_el, fr_el, C, ref = self._element_arrays(state)
+        batch = self._batch(state)
+        if not self.element.supports_mixed_iteration:
+            return self.element.mixed_forces(batch, stress)          # raises: says why
         stress = np.asarray(stress, dtype=float)
-        if stress.shape != (len(x_el), N_GAUSS, 8):
-            raise ValueError(f"stress must have shape ({len(x_el)}, {N_GAUSS}, 8), got {stress.shape}")
-        if self.kernel == "numba":
-            from flexbody.shell.element import internal_force_tangent_batch
-            return internal_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C,
-                                                self._maps, True, stress)
-        from flexbody.shell.element_reference import force_tangent
-        parts = [force_tangent(x_el[e], fr_el[e], self._geometry(e), C, self._maps, stress=stress[e])
-                 for e in range(len(x_el))]
-        return tuple(np.array([p[k] for p in parts]) for k in range(3))
+        if stress.shape != (len(batch), N_GAUSS, 8):
+            raise ValueError(f"stress must have shape ({len(batch)}, {N_GAUSS}, 8), got {stress.shape}")
+        return self.element.mixed_forces(batch, stress)
 
     def stress_forces(self, state: ShellState, stress: np.ndarray) -> np.ndarray:
         """The element forces sum_g w_g B_g^T stress_g (m, 36) of given Gauss-point stress resultants
-        (m, 7, 8), in the nodal local frames, without a tangent (numba kernel; the reference kernel takes
+        (m, 7, 8), in the nodal local frames, without a tangent (the reference kernel takes
         :meth:`mixed_element_forces`). MITC6 variants."""
         if self.kernel != "numba":
             return self.mixed_element_forces(state, stress)[2]
-        if not self.supports_mixed_iteration:
-            raise ValueError("forces of given stresses are not available for tying='mitc7'")
-        x_el, fr_el, C, ref = self._element_arrays(state)
-        from flexbody.shell.element import internal_force_tangent_batch
-        return internal_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C, self._maps,
-                                            False, np.asarray(stress, dtype=float))[2]
+        return self.element.stress_forces(self._batch(state), np.asarray(stress, dtype=float))
 
-    def _element_arrays(self, state: ShellState):
-        """Nodal positions (m, 6, 3) and frames (m, 6, 3, 3) per element, the section, the reference data."""
+    def _batch(self, state: ShellState) -> ElementBatch:
+        """The elements in ``state``: nodal positions (relative to the model origin) and frames per element,
+        the reference data, the section, the kernel and the variant's element state."""
         conn = self.mesh.elements
-        return self.relative_positions(state)[conn], state.frames[conn], self.material.section(), self.reference
+        ref = self.reference
+        return ElementBatch(self.relative_positions(state)[conn], state.frames[conn], ref.e_ref, ref.to_cart,
+                            ref.weights, self.material.section(), self.kernel, self._element_state)
 
     def relative_positions(self, state: ShellState) -> np.ndarray:
         """The state's positions relative to the model origin (n, 3): what the elements compute with."""
         return state.relative_positions(self.origin)
-
-    def _geometry(self, e: int):
-        from flexbody.shell.geometry import ElementGeometry
-        ref = self.reference
-        return ElementGeometry(ref.e_ref[e], ref.to_cart[e], ref.weights[e])
 
     def stresses(self, state: ShellState, dh_el: np.ndarray | None = None) -> np.ndarray:
         """Stress resultants C (eps_g + B_g dh) (m, 7, 8) at the Gauss points: of the state (dh_el None), or
@@ -245,86 +226,37 @@ class ShellBody:
 
     def _linearized_strains(self, state: ShellState, dh_el: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """Strains eps_g (m, 7, 8) of the state and their linearized increments B_g dh (m, 7, 8)."""
-        if not self.supports_mixed_iteration:
-            raise ValueError("linearized stresses are not available for tying='mitc7'")
-        x_el, fr_el, C, ref = self._element_arrays(state)
-        m = len(x_el)
+        batch = self._batch(state)
+        if not self.element.supports_linearized_stresses:
+            return self.element.linearized_strains(batch, dh_el)      # raises: says why
+        m = len(batch)
         dh_el = np.zeros((m, 36)) if dh_el is None else np.asarray(dh_el, dtype=float)
         if dh_el.shape != (m, 36):
             raise ValueError(f"dh_el must have shape ({m}, 36), got {dh_el.shape}")
-        if self.kernel == "numba":
-            from flexbody.shell.element import linearized_strains_batch
-            eps, deps = linearized_strains_batch(x_el, fr_el, ref.e_ref, ref.to_cart, self._maps, dh_el)
-        else:
-            from flexbody.shell.element_reference import linearized_strains
-            pairs = [linearized_strains(x_el[e], fr_el[e], self._geometry(e), dh_el[e], self.tying)
-                     for e in range(m)]
-            eps = np.array([p[0] for p in pairs]).reshape(m, N_GAUSS, 8)
-            deps = np.array([p[1] for p in pairs]).reshape(m, N_GAUSS, 8)
-        return eps, deps
+        return self.element.linearized_strains(batch, dh_el)
 
-    def _bubble_element_forces(self, x_el, fr_el, C, want_tangent):
-        """MITC7 elements: the rotation bubble condensed element by element, warm-started."""
-        ref = self.reference
-        if self.kernel == "numba":
-            from flexbody.shell.element_bubble import condensed_force_tangent_batch
-            f, K, b = condensed_force_tangent_batch(x_el, fr_el, ref.e_ref, ref.to_cart, ref.weights, C,
-                                                    self._maps, self._bubbles, want_tangent)
-            self._bubbles = b                    # a failed element keeps its start value (and returns NaN)
-            return f, (K if want_tangent else None)
-        from flexbody.shell.bubble import condense
-        m = len(x_el)
-        f = np.zeros((m, 36))
-        K = np.zeros((m, 36, 36)) if want_tangent else None
-        for e in range(m):
-            try:
-                fe, Ke, self._bubbles[e] = condense(x_el[e], fr_el[e], self._geometry(e), C, self._bubbles[e])
-            except FloatingPointError:           # the bubble diverged: a non-finite residual stops Newton
-                f[e] = np.nan
-                continue
-            f[e] = fe
-            if want_tangent:
-                K[e] = Ke
-        return f, K
+    def strains(self, state: ShellState) -> np.ndarray:
+        """The Cartesian strains (m, 7, 8) [membrane e11, e22, 2 e12 | bending | shear] at the Gauss points
+        (MITC7: at the bubbles in equilibrium with the state)."""
+        return self.element.strains(self._batch(state))
 
     def warm_up(self) -> None:
         """Compile (or load from numba's cache) the element kernels on one element, so that the first real
         evaluation and the timings of a run do not include compilation."""
         if self.kernel != "numba":
             return
-        from flexbody.shell.element import internal_force_tangent_batch
         conn = self.mesh.elements[:1]
         ref = self.reference
-        args = (self.mesh.nodes[conn].astype(float), self.frames0[conn], ref.e_ref[:1], ref.to_cart[:1],
-                ref.weights[:1], self.material.section(), self._maps)
-        if self.tying == "mitc7":
-            from flexbody.shell.element_bubble import condensed_force_tangent_batch
-            condensed_force_tangent_batch(*args, np.zeros((1, 2)), True)
-            condensed_force_tangent_batch(*args, np.zeros((1, 2)), False)
-            return
-        internal_force_tangent_batch(*args, True)
-        internal_force_tangent_batch(*args, False)
-        internal_force_tangent_batch(*args, False, np.zeros((1, N_GAUSS, 8)))
-        from flexbody.shell.element import linearized_strains_batch
-        linearized_strains_batch(*args[:4], self._maps, np.zeros((1, 36)))
+        self.element.warm_up(ElementBatch(self.mesh.nodes[conn].astype(float), self.frames0[conn], ref.e_ref[:1],
+                                          ref.to_cart[:1], ref.weights[:1], self.material.section()))
 
-    def strain_energy(self, state: ShellState) -> float:
-        """Elastic energy of the body (numpy reference element; MITC7 at the condensed bubbles)."""
-        from flexbody.shell.element_reference import element_strains, strain_energy
-        C = self.material.section()
-        ref = self.reference
-        conn = self.mesh.elements
-        x = self.relative_positions(state)
-        if self.tying == "mitc7":
-            # the bubbles in equilibrium with this state: the (cheap, warm-started) force-only evaluation
-            self.element_forces(state, want_tangent=False)
-            eps = np.array([element_strains(x[c], state.frames[c], self._geometry(e), "mitc7",
-                                            self._bubbles[e]) for e, c in enumerate(conn)])
-            return 0.5 * float(np.einsum("eg,egi,ij,egj->", ref.weights, eps, C, eps))
-        total = 0.0
-        for e, c in enumerate(conn):
-            total += strain_energy(x[c], state.frames[c], self._geometry(e), C, self.tying)
-        return total
+    def strain_energy(self, state: ShellState, strain_kernel: str = "reference") -> float:
+        """Elastic energy of the body, 1/2 sum_g w_g eps^T C eps, with the strains of the numpy reference element
+        ("reference", element by element) or the numba strain kernel ("numba"; the dynamic energy records).
+        MITC7: at the condensed bubbles, found with the body's kernel."""
+        if strain_kernel not in ("numba", "reference"):
+            raise ValueError(f"strain_kernel must be 'numba' or 'reference', got {strain_kernel!r}")
+        return self.element.strain_energy(self._batch(state), strain_kernel)
 
 
 def update_state(state: ShellState, du: np.ndarray, dtheta: np.ndarray,

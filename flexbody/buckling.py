@@ -83,7 +83,7 @@ def geometric_stiffness(model: Model, state, stress: np.ndarray, lam: float = 1.
     K(q, sigma, lam) - K(q, 0, 0) in the model's rows and columns. MITC6 bodies."""
     if not model.body.supports_mixed_iteration:
         raise ValueError("linear buckling needs an MITC6 element (the geometric stiffness of given stresses); "
-                         "tying = 'mitc7' does not provide it")
+                         f"{model.body.element_name} (tying = {model.body.element.key!r}) does not provide it")
     with_stress = state.copy()
     with_stress.stress = np.asarray(stress, dtype=float)
     without = state.copy()

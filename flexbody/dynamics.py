@@ -234,8 +234,8 @@ class DynamicModel:
         if self.damping is not None and not isinstance(self.damping, RayleighDamping):
             raise ValueError(f"damping must be RayleighDamping or None, got {type(self.damping).__name__}")
         if self.damping is not None and self.damping.beta_stiffness > 0 and not m.body.supports_mixed_iteration:
-            raise ValueError("stiffness-proportional damping (beta_stiffness > 0) needs an MITC6 element, "
-                             "not tying = 'mitc7'")
+            raise ValueError("stiffness-proportional damping (beta_stiffness > 0) needs the linearized stresses "
+                             f"of an MITC6 element, not {m.body.element_name} (tying = {m.body.element.key!r})")
         for p in self.prescribed:
             if not isinstance(p, PrescribedMotion):
                 raise ValueError(f"prescribed motions must be PrescribedMotion, got {type(p).__name__}")
@@ -559,16 +559,9 @@ class DynamicModel:
         return 0.5 * float(v @ (self._M @ v))
 
     def strain_energy(self, state: ShellState) -> float:
-        """Elastic energy 1/2 sum_g w_g eps^T C eps from the numba strain kernel (same as body.strain_energy)."""
-        from flexbody.shell.element import element_strains_batch
-        body = self.model.body
-        if body.tying == "mitc7":          # the strains need the condensed bubbles
-            return body.strain_energy(state)
-        conn = body.mesh.elements
-        ref = body.reference
-        eps = element_strains_batch(state.x[conn], state.frames[conn], ref.e_ref, ref.to_cart, body._maps)
-        C = body.material.section()
-        return 0.5 * float(np.einsum("eg,egi,ij,egj->", ref.weights, eps, C, eps))
+        """Elastic energy 1/2 sum_g w_g eps^T C eps from the numba strain kernel (MITC7: at the condensed
+        bubbles; :meth:`flexbody.body.ShellBody.strain_energy`)."""
+        return self.model.body.strain_energy(state, strain_kernel="numba")
 
     def gravity_potential(self, state: ShellState) -> float:
         """-sum s_I g . x_I, s_I the row sums of the translational mass (m_I lumped, int rho h N_I dA consistent)."""

@@ -78,14 +78,9 @@ def element_axes(body) -> np.ndarray:
 
 
 def gauss_strains(body, state) -> np.ndarray:
-    """The Cartesian strains (m, 7, 8) [membrane e11, e22, 2 e12 | bending | shear] at the Gauss points."""
-    if body.supports_mixed_iteration:
-        return body._linearized_strains(state, None)[0]
-    from flexbody.shell.element_reference import element_strains
-    body.element_forces(state, want_tangent=False)           # MITC7: the bubbles in equilibrium with the state
-    x = body.relative_positions(state)
-    return np.array([element_strains(x[c], state.frames[c], body._geometry(e), "mitc7", body._bubbles[e])
-                     for e, c in enumerate(body.mesh.elements)])
+    """The Cartesian strains (m, 7, 8) [membrane e11, e22, 2 e12 | bending | shear] at the Gauss points
+    (:meth:`flexbody.body.ShellBody.strains`)."""
+    return body.strains(state)
 
 
 def to_tensors(sigma: np.ndarray, bases: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -12,6 +12,7 @@ from flexbody.constraints import Fix
 from flexbody.dynamics import DynamicModel, RayleighDamping
 from flexbody.mesh import generators
 from flexbody.shell.material import ShellMaterial
+from flexbody.shell.variants import MITC7
 from flexbody.spinning import steady_spin
 from integrators.generalized_alpha import AlphaSettings, generalized_alpha
 
@@ -335,7 +336,7 @@ def test_bad_damping_in_the_python_api():
     with pytest.raises(ValueError, match="damping must be a RayleighDamping or None, got float"):
         DynamicAnalysis(0.01, 0.1, damping=0.05)
     mesh = generators.strip(1.0, 0.1, 2, 1)
-    body = ShellBody(mesh, ShellMaterial(1e7, 0.3, 0.01, density=1000.0), tying="mitc7")
+    body = ShellBody(mesh, ShellMaterial(1e7, 0.3, 0.01, density=1000.0), element=MITC7())
     with pytest.raises(ValueError, match="beta_stiffness > 0.*mitc7"):
         DynamicModel(Model(body, []), damping=RayleighDamping(0.0, 1e-3))
     DynamicModel(Model(body, []), damping=RayleighDamping(0.1, 0.0))      # mass-proportional: any element

@@ -25,7 +25,7 @@ def shifted(scene, offset):
     mesh = m.body.mesh
     moved = Tri6Mesh(mesh.nodes + np.asarray(offset, float), mesh.elements, mesh.directors, mesh.node_sets,
                      mesh.edge_sets)
-    body = ShellBody(moved, m.body.material, tying=m.body.tying)
+    body = ShellBody(moved, m.body.material, element=m.body.element)
     return dataclasses.replace(scene, model=Model(body, m.constraints, m.loads))
 
 

@@ -17,9 +17,7 @@ REPO = Path(__file__).resolve().parents[1]
 PACKAGES = ("flexbody", "integrators")
 
 #: cycles that another piece of work removes; each entry must still be a cycle (the test says when to drop it)
-KNOWN_CYCLES: tuple[frozenset[str], ...] = (
-    frozenset({"flexbody.shell.bubble", "flexbody.shell.element_reference"}),
-)
+KNOWN_CYCLES: tuple[frozenset[str], ...] = ()
 
 
 def module_files(root: Path, packages=PACKAGES) -> dict[str, Path]:

@@ -21,6 +21,7 @@ from flexbody.scenes.reference import Reference, read_reference_csv
 from flexbody.scenes.scene import Scene
 from flexbody.scenes.tracked import Output
 from flexbody.shell.material import ShellMaterial
+from flexbody.shell.variants import variant_from_key
 from integrators.newton import NewtonSettings
 
 
@@ -43,7 +44,7 @@ def cantilever_end_moment(nx: int = 16, ny: int = 1, thickness: float = 0.01, st
     L, b, E = 12.0, 1.0, 1.2e6
     mesh = generators.strip(L, b, nx, ny, diagonal)
     mat = ShellMaterial(E, 0.0, thickness)
-    body = ShellBody(mesh, mat, tying=tying, kernel=kernel)
+    body = ShellBody(mesh, mat, element=variant_from_key(tying), kernel=kernel)
     m_max = 2 * math.pi * E * b * thickness**3 / 12 / L
     moments = nodal_vectors_from_edges(mesh.nodes, mesh.edge_set("tip"), np.array([0.0, -m_max / b, 0.0]),
                                        mesh.n_nodes)
@@ -68,7 +69,7 @@ def cantilever_end_shear(nx: int = 16, ny: int = 1, thickness: float = 0.1, step
     """Strip L=10, b=1, h=0.1, E=1.2e6, nu=0, clamped, end shear force P_max = 4 (Sze 3.1)."""
     L, b, E = 10.0, 1.0, 1.2e6
     mesh = generators.strip(L, b, nx, ny)
-    body = ShellBody(mesh, ShellMaterial(E, 0.0, thickness), tying=tying, kernel=kernel)
+    body = ShellBody(mesh, ShellMaterial(E, 0.0, thickness), element=variant_from_key(tying), kernel=kernel)
     p_max = 4.0 * (thickness / 0.1) ** 3
     forces = nodal_vectors_from_edges(mesh.nodes, mesh.edge_set("tip"), np.array([0, 0, p_max / b]), mesh.n_nodes)
     model = Model(body, [Fix(mesh.node_set("clamped"), "all")], _loads_from_nodal(forces))
@@ -86,7 +87,7 @@ def slit_annular_plate(n_radial: int = 10, n_circ: int = 30, thickness: float = 
                        tying: bool = True, kernel: str = "numba") -> Scene:
     """Slit annular plate Ri=6, Ro=10, E=21e6, nu=0, line force q_max=0.8 on one slit edge (Sze 3.3)."""
     mesh = generators.slit_annulus(6.0, 10.0, n_radial, n_circ)
-    body = ShellBody(mesh, ShellMaterial(21e6, 0.0, thickness), tying=tying, kernel=kernel)
+    body = ShellBody(mesh, ShellMaterial(21e6, 0.0, thickness), element=variant_from_key(tying), kernel=kernel)
     q = 0.8 * (thickness / 0.03) ** 3
     forces = nodal_vectors_from_edges(mesh.nodes, mesh.edge_set("loaded"), np.array([0, 0, q]), mesh.n_nodes)
     model = Model(body, [Fix(mesh.node_set("clamped"), "all")], _loads_from_nodal(forces))
@@ -106,7 +107,7 @@ def pullout_cylinder(n_circ: int = 12, n_axial: int = 8, thickness: float = 0.09
     """Open cylinder pulled by two radial forces at mid-length, octant model (Sze 3.5): snap near 0.5 P_max."""
     R, L = 4.953, 10.35
     mesh = generators.cylinder(R, L / 2, n_circ, n_axial, angle=math.pi / 2)
-    body = ShellBody(mesh, ShellMaterial(10.5e6, 0.3125, thickness), tying=tying, kernel=kernel)
+    body = ShellBody(mesh, ShellMaterial(10.5e6, 0.3125, thickness), element=variant_from_key(tying), kernel=kernel)
     x = mesh.nodes
     on = lambda mask: np.flatnonzero(mask)
     tol = 1e-8 * R
@@ -130,7 +131,7 @@ def hemisphere(n_meridian: int = 20, n_circ: int = 20, thickness: float = 0.04, 
     """Hemisphere with an 18 deg hole, quarter model, alternating radial forces at the equator (Sze 3.4)."""
     R = 10.0
     mesh = generators.spherical_cap(R, 18.0, n_meridian, n_circ, angle=math.pi / 2)
-    body = ShellBody(mesh, ShellMaterial(6.825e7, 0.3, thickness), tying=tying, kernel=kernel)
+    body = ShellBody(mesh, ShellMaterial(6.825e7, 0.3, thickness), element=variant_from_key(tying), kernel=kernel)
     x = mesh.nodes
     tol = 1e-8 * R
     pulled = mesh.nearest_node([R, 0, 0])

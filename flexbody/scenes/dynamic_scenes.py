@@ -23,6 +23,7 @@ from flexbody.scenes.reference import Reference
 from flexbody.scenes.scene import Scene
 from flexbody.scenes.tracked import AngularVelocity, Output, RadialDisplacement
 from flexbody.shell.material import ShellMaterial
+from flexbody.shell.variants import variant_from_key
 
 
 def _spin_velocities(nodes: np.ndarray, omega, center) -> dict:
@@ -210,7 +211,7 @@ def swinging_strip(nx: int = 16, ny: int = 1, thickness: float = 0.01, young: fl
     from integrators.generalized_alpha import AlphaSettings
     L, b, rho, g = 1.0, 0.1, 7850.0, 9.81
     mesh = generators.strip(L, b, nx, ny)
-    model = Model(ShellBody(mesh, ShellMaterial(young, 0.0, thickness, density=rho), tying=tying),
+    model = Model(ShellBody(mesh, ShellMaterial(young, 0.0, thickness, density=rho), element=variant_from_key(tying)),
                   [Fix(mesh.node_set("clamped"), "all")])
     tip = mesh.nearest_node([L, b / 2, 0.0])
     analysis = DynamicAnalysis(dt, end_time, rho_inf, policy, output_every, gravity=(0.0, 0.0, -g),

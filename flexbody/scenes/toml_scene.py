@@ -59,7 +59,7 @@ from flexbody.scenes.toml_document import (COMPONENTS, DAMPING_KEYS, DENSITY_PAR
                                            apply_overrides, flatten, generator_function, read_toml, resolve_key)
 from flexbody.scenes.toml_values import MAX_STEPS, SceneError, Table, call_checked
 from flexbody.scenes.tracked import AngularVelocity, Output, RadialDisplacement
-from flexbody.shell.element_reference import TYING_NAMES
+from flexbody.shell.variants import VARIANT_KEYS, variant_from_key
 
 __all__ = ["scene_from_document", "load_toml_scene", "density_parameters",
            # kept under this import path (they live in toml_document and toml_values)
@@ -665,10 +665,10 @@ def scene_from_document(doc: dict, path: str | Path) -> Scene:
     et = top.table("element", {})
     tying = et.raw("tying", True)
     if not isinstance(tying, bool):
-        tying = et.string("tying", True, choices=TYING_NAMES)
+        tying = et.string("tying", True, choices=VARIANT_KEYS)
     kernel = et.string("kernel", "numba", choices=("numba", "reference"))
     et.done(ELEMENT_KEYS)
-    body = call_checked(where, "element", ShellBody, mesh, material, tying=tying, kernel=kernel)
+    body = call_checked(where, "element", ShellBody, mesh, material, element=variant_from_key(tying), kernel=kernel)
     constraints = _build_bcs(top.tables("bc"), mesh)
     dynamic = _analysis_type(doc, where) == "dynamic"
     loads, load_groups, load_functions = _build_timed_loads(top.tables("load"), mesh, dynamic)

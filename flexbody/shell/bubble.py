@@ -25,8 +25,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from flexbody.shell.element_reference import assumed_strain_maps, force_tangent
 from flexbody.shell.geometry import ElementGeometry
 from flexbody.shell.kinematics import NDOF
+from flexbody.shell.mitc6 import DEFAULT_SCHEME
+
+#: MITC7's assumed-strain map: the default membrane scheme, the canonical shear tying (read-only).
+MITC7_MAPS = assumed_strain_maps(DEFAULT_SCHEME, "mitc7")
+MITC7_MAPS.flags.writeable = False
 
 #: Newton on the bubble stops when its correction is below this (b is an angle).
 BUBBLE_TOL = 1e-13
@@ -66,8 +72,7 @@ def bubble_step(g0: float, g1: float, h00: float, h01: float, h10: float, h11: f
 
 
 def _augmented(x, frames, geom, section, b):
-    from flexbody.shell.element_reference import _maps, force_tangent
-    return force_tangent(x, frames, geom, section, _maps("mitc7"), b)
+    return force_tangent(x, frames, geom, section, MITC7_MAPS, b)
 
 
 def condensed_bubble(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,

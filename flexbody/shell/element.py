@@ -1920,8 +1920,11 @@ class CompressedMaps:
 _MAP_CACHE: dict[bytes, CompressedMaps] = {}
 
 
-def compress_maps(A: np.ndarray) -> CompressedMaps:
-    """Compressed form of an assumed-strain map (cached on its contents)."""
+def compress_maps(A: np.ndarray | CompressedMaps) -> CompressedMaps:
+    """Compressed form of an assumed-strain map (cached on its contents); a compressed map is returned as it
+    is (an element variant compresses its map once, :mod:`flexbody.shell.variants`)."""
+    if isinstance(A, CompressedMaps):
+        return A
     A = np.ascontiguousarray(A, dtype=np.float64)
     key = A.tobytes()
     maps = _MAP_CACHE.get(key)
@@ -1976,7 +1979,8 @@ def _element_arrays(x_el, frames_el, e_ref, to_cart, **more):
 
 def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.ndarray,
                                  to_cart: np.ndarray, weights: np.ndarray, section: np.ndarray,
-                                 A: np.ndarray, want_tangent: bool = True, stress: np.ndarray | None = None):
+                                 A: np.ndarray | CompressedMaps, want_tangent: bool = True,
+                                 stress: np.ndarray | None = None):
     """Internal forces (m, 36) and tangents (m, 36, 36) of m elements, per node [u, theta], local frames.
 
     Same result as :func:`flexbody.shell.element_reference.internal_force_tangent` element by element.
@@ -1986,7 +1990,8 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
     x_el : (m, 6, 3) nodal positions;  frames_el : (m, 6, 3, 3) nodal frames
     e_ref : (m, 17, 8), to_cart : (m, 7, 8, 8), weights : (m, 7)  reference data (geometry.element_geometry)
     section : (8, 8) symmetric section stiffness
-    A : (7, 8, 17, 8) assumed-strain map (element_reference.assumed_strain_maps(tying))
+    A : (7, 8, 17, 8) assumed-strain map (``ElementVariant.maps``), or its :class:`CompressedMaps`
+        (``ElementVariant.compressed_maps``: no re-hashing)
     want_tangent : False takes the residual-only path (no tangent, no second variation); K is then None.
     stress : optional (m, 7, 8) Cartesian stress resultants at the Gauss points for the geometric terms of
         the tangent (the mixed Newton iteration, :func:`flexbody.shell.element_reference.force_tangent`);
@@ -2014,7 +2019,7 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
 
 
 def element_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.ndarray, to_cart: np.ndarray,
-                          A: np.ndarray) -> np.ndarray:
+                          A: np.ndarray | CompressedMaps) -> np.ndarray:
     """Cartesian strains [membrane | bending | shear] at the 7 Gauss points of m elements, (m, 7, 8).
 
     Same result as :func:`flexbody.shell.element_reference.element_strains` element by element.
@@ -2030,7 +2035,7 @@ def element_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.nda
 
 
 def linearized_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.ndarray, to_cart: np.ndarray,
-                             A: np.ndarray, dh_el: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                             A: np.ndarray | CompressedMaps, dh_el: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Cartesian Gauss-point strains eps (m, 7, 8) of m elements and their linearization B dh along the local
     nodal motions dh_el (m, 36), per node [du, dtheta] (the strain increment of the mixed Newton iteration).
 

@@ -50,6 +50,8 @@ SO(3) maps: :mod:`flexbody.lie.kernels` (same conventions as :mod:`flexbody.lie.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numba
 import numpy as np
 from numba import prange
@@ -887,23 +889,42 @@ def _batch(x_el, fr_el, e_ref, to_cart, weights, C, a_ptr, a_i, a_p, a_j, a_v, u
 # Python entry point
 # ----------------------------------------------------------------------------------------------------------
 
-_MAP_CACHE: dict[bytes, tuple] = {}
+class MapNonzeros(NamedTuple):
+    """The nonzeros of an assumed-strain map A (7, 8, 17, 8) by Gauss point, and the evaluation points used."""
+
+    ptr: np.ndarray     # (8,) start of each Gauss point's entries
+    i: np.ndarray       # row component
+    p: np.ndarray       # evaluation point
+    j: np.ndarray       # column component
+    value: np.ndarray   # A[g, i, p, j]
+    used: np.ndarray    # (17,) bool: the evaluation points the map uses
 
 
-def _map_nonzeros(A: np.ndarray) -> tuple:
-    """The nonzeros of A (7, 8, 17, 8) by Gauss point: (ptr, i, p, j, value), and the points used."""
+def map_nonzeros(A: np.ndarray) -> MapNonzeros:
+    """The kernel's form of an assumed-strain map A (7, 8, 17, 8) (computed; :func:`_map_nonzeros` caches)."""
     A = np.ascontiguousarray(A, dtype=np.float64)
     if A.shape != (N_GAUSS, 8, N_EVAL, 8):
         raise ValueError(f"A must have shape {(N_GAUSS, 8, N_EVAL, 8)}, got {A.shape}")
+    g, i, p, j = np.nonzero(A)                   # row-major: sorted by g
+    ptr = np.searchsorted(g, np.arange(N_GAUSS + 1)).astype(np.int64)
+    used = np.zeros(N_EVAL, dtype=np.bool_)
+    used[p] = True
+    return MapNonzeros(ptr, i.astype(np.int64), p.astype(np.int64), j.astype(np.int64),
+                       np.ascontiguousarray(A[g, i, p, j]), used)
+
+
+_MAP_CACHE: dict[bytes, MapNonzeros] = {}
+
+
+def _map_nonzeros(A: np.ndarray | MapNonzeros) -> MapNonzeros:
+    """:func:`map_nonzeros`, cached on the contents of A; a MapNonzeros is returned as it is."""
+    if isinstance(A, MapNonzeros):
+        return A
+    A = np.ascontiguousarray(A, dtype=np.float64)
     key = A.tobytes()
     out = _MAP_CACHE.get(key)
     if out is None:
-        g, i, p, j = np.nonzero(A)                   # row-major: sorted by g
-        ptr = np.searchsorted(g, np.arange(N_GAUSS + 1)).astype(np.int64)
-        used = np.zeros(N_EVAL, dtype=np.bool_)
-        used[p] = True
-        out = (ptr, i.astype(np.int64), p.astype(np.int64), j.astype(np.int64),
-               np.ascontiguousarray(A[g, i, p, j]), used)
+        out = map_nonzeros(A)
         if len(_MAP_CACHE) > 8:
             _MAP_CACHE.clear()
         _MAP_CACHE[key] = out
@@ -919,7 +940,8 @@ def _n_chunks(m: int) -> int:
 
 
 def condensed_force_tangent_batch(x_el: np.ndarray, fr_el: np.ndarray, e_ref: np.ndarray, to_cart: np.ndarray,
-                                  weights: np.ndarray, C: np.ndarray, A: np.ndarray, b0: np.ndarray | None,
+                                  weights: np.ndarray, C: np.ndarray, A: np.ndarray | MapNonzeros,
+                                  b0: np.ndarray | None,
                                   want_tangent: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Condensed MITC7 force (m, 36), tangent (m, 36, 36) and bubble amplitudes (m, 2) of m elements.
 
@@ -935,7 +957,8 @@ def condensed_force_tangent_batch(x_el: np.ndarray, fr_el: np.ndarray, e_ref: np
     to_cart : (m, 7, 8, 8) covariant-to-Cartesian maps at the Gauss points
     weights : (m, 7) Gauss weights times area elements
     C : (8, 8) section stiffness
-    A : (7, 8, 17, 8) assumed-strain map, ``element_reference.assumed_strain_maps("mitc7")``
+    A : (7, 8, 17, 8) assumed-strain map, ``MITC7().maps``, or its :class:`MapNonzeros`
+        (``MITC7().compressed_maps``: no re-hashing)
     b0 : (m, 2) warm start of the bubble's Newton (e.g. the b returned by the last call), or None (zeros)
     want_tangent : False skips the tangent (only the bubble block K_bb is formed, for the Newton on b)
 

@@ -27,88 +27,71 @@ EVAL_NB = np.array([bubble_function(r, s) for r, s in EVAL_POINTS])
 EVAL_DNB = np.array([bubble_derivatives(r, s) for r, s in EVAL_POINTS])
 
 
-#: The ``tying`` arguments that name an element variant besides True and False.
-TYING_NAMES = (*MEMBRANE_SCHEMES, "mitc7")
+#: Transverse shear tying schemes: MITC6a's edge stations (MITC6) and MITC7's canonical degrees of freedom.
+SHEAR_SCHEMES = ("mitc6", "mitc7")
 
 
-def _scheme(tying: bool | str) -> str | None:
-    """The membrane scheme of a ``tying`` argument: True or "mitc7" -> the default, a scheme name,
-    False -> None."""
-    if isinstance(tying, str):
-        if tying not in TYING_NAMES:
-            raise ValueError(f"tying must be True, False or one of {TYING_NAMES}, got {tying!r}")
-        return DEFAULT_SCHEME if tying == "mitc7" else tying
-    return DEFAULT_SCHEME if tying else None
-
-
-def assumed_strain_maps(tying: bool | str) -> np.ndarray:
+def assumed_strain_maps(membrane: str | None = DEFAULT_SCHEME, shear: str | None = "mitc6") -> np.ndarray:
     """A (7, 8, 17, 8): covariant strains at Gauss point g = sum A[g, :, p, :] e[p] over evaluation points.
 
-    tying : True (MITC6 with the default membrane scheme), a scheme of ``mitc6.MEMBRANE_SCHEMES``
-    ("mean", "point"), "mitc7" (the default membrane scheme, MITC7 shear) or False (plain
-    displacement-based strains).
+    membrane : a membrane tying scheme of ``mitc6.MEMBRANE_SCHEMES`` ("mean", "point"), or None (the strains
+        of the Gauss point itself, displacement-based)
+    shear : "mitc6" (MITC6a), "mitc7" (the canonical tying of MITC7, :mod:`flexbody.shell.bubble`) or None
+        (displacement-based). Bending is always displacement-based.
+
+    The element variants of :mod:`flexbody.shell.variants` hold theirs (``ElementVariant.maps``).
     """
-    scheme = _scheme(tying)
+    if membrane is not None and membrane not in MEMBRANE_SCHEMES:
+        raise ValueError(f"membrane must be one of {MEMBRANE_SCHEMES} or None, got {membrane!r}")
+    if shear is not None and shear not in SHEAR_SCHEMES:
+        raise ValueError(f"shear must be one of {SHEAR_SCHEMES} or None, got {shear!r}")
     n_eval = N_TYING + N_GAUSS
     A = np.zeros((N_GAUSS, 8, n_eval, 8))
     for g in range(N_GAUSS):
         gp = GAUSS_OFFSET + g
         A[g, BENDING, gp, BENDING] = np.eye(3)
-        if scheme is not None:
-            A[g, MEMBRANE, :, MEMBRANE] = MEMBRANE_MAPS[scheme][g]
-            if tying == "mitc7":
-                A[g, SHEAR, :, SHEAR] = MITC7_SHEAR_MAPS[g]
-            else:
-                A[g, SHEAR, :N_TYING, SHEAR] = SHEAR_MAPS[g]
-        else:
+        if membrane is None:
             A[g, MEMBRANE, gp, MEMBRANE] = np.eye(3)
+        else:
+            A[g, MEMBRANE, :, MEMBRANE] = MEMBRANE_MAPS[membrane][g]
+        if shear is None:
             A[g, SHEAR, gp, SHEAR] = np.eye(2)
+        elif shear == "mitc7":
+            A[g, SHEAR, :, SHEAR] = MITC7_SHEAR_MAPS[g]
+        else:
+            A[g, SHEAR, :N_TYING, SHEAR] = SHEAR_MAPS[g]
     return A
 
 
-_MAPS = {s: assumed_strain_maps(s) for s in (False, *TYING_NAMES)}
-
-
-def _maps(tying: bool | str) -> np.ndarray:
-    if tying == "mitc7":
-        return _MAPS["mitc7"]
-    scheme = _scheme(tying)
-    return _MAPS[False if scheme is None else scheme]
-
-
-def element_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, tying: bool | str = True,
+def element_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, A: np.ndarray,
                     bubble: np.ndarray | None = None) -> np.ndarray:
     """Cartesian strains [membrane eps11, eps22, 2eps12 | bending | shear] at the 7 Gauss points, (7, 8).
 
-    For tying="mitc7" pass the rotation bubble b (:func:`flexbody.shell.bubble.condensed_bubble`).
+    A : the assumed-strain map (:func:`assumed_strain_maps`, ``ElementVariant.maps``)
+    bubble : the rotation bubble b (2,) of MITC7 (:func:`flexbody.shell.bubble.condensed_bubble`), or None
     """
-    if tying == "mitc7" and bubble is None:
-        raise ValueError("tying='mitc7' needs the rotation bubble: pass bubble=condensed_bubble(...)")
     d_nodes = relative_rotations(frames)
     e = np.array([covariant_strains(point_kinematics(
         x, frames, d_nodes, N, dN, None if bubble is None else (EVAL_NB[p], EVAL_DNB[p], bubble)).F)
         for p, (N, dN) in enumerate(zip(EVAL_N, EVAL_DN))]) - geom.e_ref
-    cov = np.einsum("gipj,pj->gi", _maps(tying), e)
+    cov = np.einsum("gipj,pj->gi", A, e)
     return np.einsum("gij,gj->gi", geom.to_cart, cov)
 
 
 def internal_force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,
-                           tying: bool | str = True) -> tuple[np.ndarray, np.ndarray]:
-    """Internal force (36,) and tangent (36, 36) in the nodal local frames, per node [u, theta].
+                           A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Internal force (36,) and tangent (36, 36) in the nodal local frames, per node [u, theta], of an element
+    without a bubble (the MITC6 variants; MITC7's is :func:`flexbody.shell.bubble.condensed_force_tangent`;
+    ``ElementVariant.element_force_tangent`` takes either).
 
     Parameters
     ----------
     x : (6, 3) nodal positions; frames : (6, 3, 3) nodal frames R_I
     geom : reference data from :func:`flexbody.shell.geometry.element_geometry`
     section : (8, 8) Cartesian section stiffness (``ShellMaterial.section()``)
-    tying : MITC6 assumed strains on (True, or a membrane scheme name, see :func:`assumed_strain_maps`),
-             plain displacement-based strains (False), or "mitc7": the rotation bubble, condensed
-             (:mod:`flexbody.shell.bubble`)
+    A : the assumed-strain map (:func:`assumed_strain_maps`, ``ElementVariant.maps``)
     """
-    if tying == "mitc7":
-        from flexbody.shell.bubble import condensed_force_tangent
-        return condensed_force_tangent(x, frames, geom, section)
-    return force_tangent(x, frames, geom, section, _maps(tying))
+    return force_tangent(x, frames, geom, section, A)
 
 
 def _point_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, bubble: np.ndarray | None):
@@ -125,21 +108,20 @@ def _point_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, bub
 
 
 def linearized_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, dh: np.ndarray,
-                       tying: bool | str = True) -> tuple[np.ndarray, np.ndarray]:
+                       A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Cartesian strains eps_g (7, 8) at the Gauss points and their linearization B_g dh along the local
     nodal motion dh (36,), per node [du, dtheta]: the strains of the mixed Newton iteration,
-    eps_g + B_g dh (MITC6 variants; not MITC7, whose bubble is condensed). dh (36, k): B_g dh is (7, 8, k)."""
-    if tying == "mitc7":
-        raise ValueError("linearized strains are defined for the MITC6 variants, not for tying='mitc7'")
+    eps_g + B_g dh, for the assumed-strain map A of an element without a bubble (the MITC6 variants; not
+    MITC7, whose bubble is condensed). dh (36, k): B_g dh is (7, 8, k)."""
     _, e, B = _point_strains(x, frames, geom, None)
-    to_cart = np.einsum("gij,gjpk->gipk", geom.to_cart, _maps(tying))
+    to_cart = np.einsum("gij,gjpk->gipk", geom.to_cart, A)
     return np.einsum("gipk,pk->gi", to_cart, e), np.einsum("gipk,pkn,n...->gi...", to_cart, B, dh)
 
 
 def force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,
                   A: np.ndarray, bubble: np.ndarray | None = None,
                   stress: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Force and tangent for the assumed-strain maps A (:func:`assumed_strain_maps`).
+    """Force and tangent for the assumed-strain map A (:func:`assumed_strain_maps`, ``ElementVariant.maps``).
 
     bubble : None, or the rotation bubble's amplitudes b (2,) (:mod:`flexbody.shell.bubble`); the force and
         tangent then have 38 components, the last two for b.
@@ -178,11 +160,7 @@ def force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, sect
 
 
 def strain_energy(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,
-                  tying: bool | str = True) -> float:
-    """Elastic energy of the element, 1/2 sum_g w_g eps_g^T C eps_g (MITC7: at the condensed bubble)."""
-    bubble = None
-    if tying == "mitc7":
-        from flexbody.shell.bubble import condensed_bubble
-        bubble = condensed_bubble(x, frames, geom, section)
-    eps = element_strains(x, frames, geom, tying, bubble)
+                  A: np.ndarray, bubble: np.ndarray | None = None) -> float:
+    """Elastic energy of the element, 1/2 sum_g w_g eps_g^T C eps_g (MITC7: pass the condensed bubble)."""
+    eps = element_strains(x, frames, geom, A, bubble)
     return 0.5 * float(np.einsum("g,gi,ij,gj->", geom.weights, eps, section, eps))

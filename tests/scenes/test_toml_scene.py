@@ -12,6 +12,7 @@ from flexbody.scenes.builtin import cantilever_end_shear
 from flexbody.scenes.scene import run_scene
 from flexbody.scenes.sources import open_scene
 from flexbody.scenes.toml_scene import SceneError, apply_overrides, flatten, load_toml_scene, resolve_key
+from flexbody.shell.variants import MITC6, MITC7, NoTying
 
 REPO = Path(__file__).resolve().parents[2]
 EXAMPLES = REPO / "examples"
@@ -192,8 +193,8 @@ def test_arc_length_example_matches_the_builtin_model():
     assert set(toml.reference.values) == {"W_A", "minus_U_B", "minus_U_C"}  # columns named like the outputs
 
 
-@pytest.mark.parametrize("tying", ["mitc7", "point", False])
-def test_element_variant_by_name(tmp_path, tying):
-    value = "false" if tying is False else f'"{tying}"'
+@pytest.mark.parametrize("value, variant", [('"mitc7"', MITC7()), ('"point"', MITC6(membrane="point")),
+                                            ('"mean"', MITC6()), ("true", MITC6()), ("false", NoTying())])
+def test_element_variant_by_name(tmp_path, value, variant):
     scene = load_toml_scene(write(tmp_path, PLATE.replace("[[bc]]", f"[element]\ntying = {value}\n[[bc]]", 1)))
-    assert scene.model.body.tying == tying
+    assert scene.model.body.element == variant

@@ -9,6 +9,7 @@ from flexbody.body import ShellBody, ShellState
 from flexbody.lie import so3
 from flexbody.mesh import generators
 from flexbody.shell.material import ShellMaterial
+from flexbody.shell.variants import MITC6, NoTying
 
 
 def deformed_state(body: ShellBody, rng, amplitude=0.05, rot=0.4) -> ShellState:
@@ -22,13 +23,13 @@ def deformed_state(body: ShellBody, rng, amplitude=0.05, rot=0.4) -> ShellState:
 
 
 @pytest.mark.parametrize("geometry", ["flat", "curved"])
-@pytest.mark.parametrize("tying", [True, False])
-def test_numba_kernel_matches_reference(geometry, tying):
+@pytest.mark.parametrize("variant", [MITC6(), NoTying()], ids=repr)
+def test_numba_kernel_matches_reference(geometry, variant):
     mesh = (generators.strip(1.0, 0.6, 2, 1, diagonal="alternate") if geometry == "flat"
             else generators.cylinder(1.5, 1.0, 2, 1, angle=math.pi / 2))
     material = ShellMaterial(2.0e5, 0.3, 0.02)
-    fast = ShellBody(mesh, material, tying=tying, kernel="numba")
-    slow = ShellBody(mesh, material, tying=tying, kernel="reference")
+    fast = ShellBody(mesh, material, element=variant, kernel="numba")
+    slow = ShellBody(mesh, material, element=variant, kernel="reference")
     rng = np.random.default_rng(3)
     for _ in range(2):
         state = deformed_state(fast, rng)
@@ -53,14 +54,14 @@ def test_comparison_can_fail():
 
 
 @pytest.mark.parametrize("geometry", ["flat", "curved"])
-@pytest.mark.parametrize("tying", [True, False])
-def test_numba_mixed_iteration_matches_reference(geometry, tying):
+@pytest.mark.parametrize("variant", [MITC6(), NoTying()], ids=repr)
+def test_numba_mixed_iteration_matches_reference(geometry, variant):
     """The iteration matrix with given Gauss-point stresses and the linearized stresses C (eps + B dh)."""
     mesh = (generators.strip(1.0, 0.6, 2, 1, diagonal="alternate") if geometry == "flat"
             else generators.cylinder(1.5, 1.0, 2, 1, angle=math.pi / 2))
     material = ShellMaterial(2.0e5, 0.3, 0.02)
-    fast = ShellBody(mesh, material, tying=tying, kernel="numba")
-    slow = ShellBody(mesh, material, tying=tying, kernel="reference")
+    fast = ShellBody(mesh, material, element=variant, kernel="numba")
+    slow = ShellBody(mesh, material, element=variant, kernel="reference")
     rng = np.random.default_rng(7)
     state = deformed_state(fast, rng)
     m = mesh.n_elements

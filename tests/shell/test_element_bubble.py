@@ -5,14 +5,14 @@ import pytest
 
 from flexbody.shell.bubble import condensed_bubble, condensed_force_tangent
 from flexbody.shell.element_bubble import condensed_force_tangent_batch
-from flexbody.shell.element_reference import _maps
+from flexbody.shell.variants import MITC7
 from tests.shell.conftest import deformed
 
 TOL = 1e-12
 #: Deformed states per reference element: (seed, nodal amplitude, nodal rotation), all under a random
 #: large rigid rotation (conftest.deformed).
 STATES = [(0, 0.05, 0.3), (1, 0.05, 0.3), (2, 0.1, 0.6)]
-A7 = _maps("mitc7")
+A7 = MITC7().maps
 _REFERENCE = {}
 
 

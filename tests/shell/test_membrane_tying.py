@@ -13,6 +13,7 @@ from flexbody.scenes import build
 from flexbody.shell import mitc6
 from flexbody.shell.element_reference import assumed_strain_maps
 from flexbody.shell.geometry import EVAL_POINTS, GAUSS_POINTS, GAUSS_WEIGHTS, MEMBRANE_MAPS
+from flexbody.shell.variants import MITC6
 
 QQ = np.array([0.5, 0.5, -1.0])
 
@@ -54,11 +55,15 @@ def test_mean_scheme_ties_edge_stations_and_element_mean():
                                atol=1e-12)
 
 
-def test_tying_argument():
-    np.testing.assert_array_equal(assumed_strain_maps(True), assumed_strain_maps(mitc6.DEFAULT_SCHEME))
-    assert np.abs(assumed_strain_maps("mean") - assumed_strain_maps("point")).max() > 0.1
-    with pytest.raises(ValueError, match="tying must be"):
+def test_membrane_argument():
+    np.testing.assert_array_equal(assumed_strain_maps(), assumed_strain_maps(mitc6.DEFAULT_SCHEME))
+    np.testing.assert_array_equal(MITC6().maps, assumed_strain_maps("mean"))
+    np.testing.assert_array_equal(MITC6(membrane="point").maps, assumed_strain_maps("point"))
+    assert np.abs(MITC6().maps - MITC6(membrane="point").maps).max() > 0.1
+    with pytest.raises(ValueError, match="membrane must be one of"):
         assumed_strain_maps("mitc6z")
+    with pytest.raises(ValueError, match="MITC6 membrane must be one of 'mean', 'point', got 'mitc6z'"):
+        MITC6(membrane="mitc6z")
 
 
 def hemisphere_linear(hr: float, tying, n: int = 10) -> float:
@@ -82,12 +87,12 @@ def test_thin_hemisphere_does_not_lock_with_the_mean_scheme():
 def test_both_schemes_tangent_energy_and_zero_modes(element, scheme):
     """Tangent vs finite differences, force = energy gradient and six zero-energy modes, for each scheme."""
     from tests.shell.test_element_reference import reduced, tangent_error
-    from flexbody.shell.element_reference import internal_force_tangent
     from tests.shell.conftest import deformed
     X, frames, geom, C = element
     x, fr = deformed(X, frames, np.random.default_rng(5))
-    assert tangent_error(x, fr, geom, C, scheme) < 1e-7
-    K = reduced(internal_force_tangent(X, frames, geom, C, scheme)[1])
+    variant = MITC6(membrane=scheme)
+    assert tangent_error(x, fr, geom, C, variant) < 1e-7
+    K = reduced(variant.element_force_tangent(X, frames, geom, C)[1])
     eig = np.sort(np.abs(np.linalg.eigvalsh(0.5 * (K + K.T)))) / np.abs(K).max()
     assert eig[5] < 1e-7 and eig[6] > 1e-6, eig[:8]
 
@@ -101,8 +106,8 @@ def test_numba_kernel_matches_reference_for_each_scheme(scheme):
     from tests.shell.test_element import deformed_state
     mesh = generators.cylinder(1.5, 1.0, 2, 1, angle=math.pi / 2)
     material = ShellMaterial(2.0e5, 0.3, 0.02)
-    fast = ShellBody(mesh, material, tying=scheme, kernel="numba")
-    slow = ShellBody(mesh, material, tying=scheme, kernel="reference")
+    fast = ShellBody(mesh, material, element=MITC6(membrane=scheme), kernel="numba")
+    slow = ShellBody(mesh, material, element=MITC6(membrane=scheme), kernel="reference")
     state = deformed_state(fast, np.random.default_rng(4))
     f1, K1 = fast.element_forces(state)
     f0, K0 = slow.element_forces(state)

@@ -13,6 +13,7 @@ from flexbody.body import ShellBody
 from flexbody.mesh import Tri6Mesh
 from flexbody.mesh import generators
 from flexbody.shell.material import ShellMaterial
+from flexbody.shell.variants import MITC6, MITC7, ElementVariant, NoTying
 
 
 def distorted_patch() -> Tri6Mesh:
@@ -43,9 +44,9 @@ def global_stiffness(body: ShellBody) -> np.ndarray:
     return K[np.ix_(keep, keep)]
 
 
-def solve_patch(mesh: Tri6Mesh, exact: np.ndarray, tying: bool) -> np.ndarray:
+def solve_patch(mesh: Tri6Mesh, exact: np.ndarray, element: ElementVariant) -> np.ndarray:
     """Interior values solved with the exact values (n, 5) prescribed on the boundary nodes."""
-    body = ShellBody(mesh, ShellMaterial(1.0e4, 0.25, 0.05), tying=tying)
+    body = ShellBody(mesh, ShellMaterial(1.0e4, 0.25, 0.05), element=element)
     assert np.allclose(body.frames0[:, :, :], np.eye(3))
     K = global_stiffness(body)
     boundary = np.unique(mesh.boundary_edges())
@@ -58,18 +59,18 @@ def solve_patch(mesh: Tri6Mesh, exact: np.ndarray, tying: bool) -> np.ndarray:
     return u.reshape(-1, 5)
 
 
-@pytest.mark.parametrize("tying", [True, False, "mitc7"])
-def test_membrane_patch(tying):
+@pytest.mark.parametrize("element", [MITC6(), NoTying(), MITC7()], ids=repr)
+def test_membrane_patch(element):
     mesh = distorted_patch()
     B = np.array([[1.0e-3, 4.0e-4], [-2.0e-4, 6.0e-4]])
     exact = np.zeros((mesh.n_nodes, 5))
     exact[:, :2] = mesh.nodes[:, :2] @ B.T
-    u = solve_patch(mesh, exact, tying)
+    u = solve_patch(mesh, exact, element)
     assert np.abs(u - exact).max() < 1e-10 * np.abs(exact).max()
 
 
-@pytest.mark.parametrize("tying", [True, False, "mitc7"])
-def test_bending_patch(tying):
+@pytest.mark.parametrize("element", [MITC6(), NoTying(), MITC7()], ids=repr)
+def test_bending_patch(element):
     mesh = distorted_patch()
     a, b, c = 2.0e-3, -7.0e-4, 1.2e-3
     x, y = mesh.nodes[:, 0], mesh.nodes[:, 1]
@@ -78,7 +79,7 @@ def test_bending_patch(tying):
     w_x, w_y = a * x + b * y, b * x + c * y
     # zero transverse shear: the director turns with the slope, theta x e3 = -grad w
     exact[:, 3], exact[:, 4] = w_y, -w_x
-    u = solve_patch(mesh, exact, tying)
+    u = solve_patch(mesh, exact, element)
     assert np.abs(u - exact).max() < 1e-9 * np.abs(exact).max()
 
 
@@ -89,5 +90,5 @@ def test_patch_test_can_fail():
     exact = np.zeros((mesh.n_nodes, 5))
     exact[:, 2] = 1e-3 * x**3
     exact[:, 4] = -3e-3 * x**2
-    u = solve_patch(mesh, exact, True)
+    u = solve_patch(mesh, exact, MITC6())
     assert np.abs(u - exact).max() > 1e-6 * np.abs(exact).max()
