@@ -11,7 +11,11 @@ Decorators (all cached in :data:`flexbody.kernel_cache.CACHE_DIR` when it is usa
   (results agree with the numpy reference to round-off), no reference counting (``_nrt=False``; otherwise
   every array argument costs an atomic incref/decref per call) and ``noalias`` array arguments (below).
 - :data:`inline`: :data:`fast` inlined at numba-IR level into its callers (small helpers of the point loops).
-- :data:`parallel`: the element loops over ``prange`` chunks (numba's defaults plus ``parallel=True``).
+- :data:`entry`: :data:`fast` without the GIL: the element loops over a chunk of elements, called from Python
+  (:func:`flexbody.chunks.run_chunks` runs several chunks on threads). They replace numba's ``parallel=True``
+  loops, whose parfor compilation cost a first run about 20 s of CPU (re-optimizing every inlined kernel once
+  more) for the element kernels alone, and which one-thread runs (all the built-in scenes) never needed.
+- :data:`parallel`: numba's defaults plus ``parallel=True`` (no flexbody kernel uses it now).
 - :func:`prefetch`: an intrinsic that prefetches the cache line of one array element (a hint, never a fault).
 - :data:`uint`: ``numba.uint64``, for unsigned inner-loop indices with run-time bounds (lets LLVM vectorize).
 
@@ -91,6 +95,7 @@ plain = numba.njit(cache=CACHE)
 released = numba.njit(cache=CACHE, nogil=True)
 fast = numba.njit(**FAST_FLAGS)
 inline = numba.njit(inline="always", **FAST_FLAGS)
+entry = numba.njit(nogil=True, **FAST_FLAGS)
 parallel = numba.njit(cache=CACHE, parallel=True)
 uint = numba.uint64
 
