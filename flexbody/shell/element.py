@@ -41,22 +41,23 @@ switch, the Taylor series ``so3.SERIES`` fused below), and the maps that take th
 ``d2_tangent_co_into``; a point needs up to eight), inlined.
 
 Performance notes: the small helpers are inlined at numba-IR level so that the per-point functions contain no
-calls; the kernels are compiled without reference counting and with noalias array arguments (see flexbody._numba), so
-that point data are read through views of the per-point arrays at no cost; the element loop runs inside one
-function per parallel chunk, whose workspaces are allocated once per chunk (a few chunks per thread), and
-prefetches the next element's data. Nothing is allocated per element or point. The section stiffness must be
-symmetric.
+calls (the large stages of the point tangent, _geometric_core and _expand_core*, are compiled on their own:
+inlined into _points_tangent they doubled its compile time); the kernels are compiled without reference
+counting and with noalias array arguments (see flexbody._numba), so that point data are read through views of
+the per-point arrays at no cost; the element loop runs inside one function per chunk of elements
+(flexbody.chunks: one chunk on one thread, a few per thread otherwise), whose workspaces are allocated once
+per thread and reused, and prefetches the next element's data. Nothing is allocated per element or point.
+The section stiffness must be symmetric.
 """
 
 from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
-from numba import prange
 
 from flexbody import _numba
+from flexbody.chunks import n_chunks as _n_chunks, run_chunks, scratch
 from flexbody._numba import prefetch as _prefetch
 from flexbody.kernel_arrays import kernel_input as _as
 from flexbody.lie import kernels as lk
@@ -262,8 +263,11 @@ def _interpolate_points(used, dn, Pd, Pda):
 
 
 @jit
-def _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, with_x):
-    """Q = exp(d), T(d), R = R_0 Q, F = [f_ru, f_su, f_rw, f_sw], X_a = DT(d)[.] d_,a at the used points."""
+def _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX):
+    """Q = exp(d), T(d), R = R_0 Q, F = [f_ru, f_su, f_rw, f_sw], X_a = DT(d)[.] d_,a at the used points.
+
+    (X is computed also where only the strains are wanted: one compiled version serves every caller.)
+    """
     for k in range(used.shape[0]):
         p = used[k]
         d0 = Pd[p, 0]
@@ -291,9 +295,8 @@ def _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, with_x):
             for c in range(3):
                 PF[p, a, c] = R[0, c] * xa0 + R[1, c] * xa1 + R[2, c] * xa2
                 PF[p, 2 + a, c] = T[c, 0] * Pda[p, a, 0] + T[c, 1] * Pda[p, a, 1] + T[c, 2] * Pda[p, a, 2]
-        if with_x:
-            lk.d_tangent_co_into((d0, d1, d2), (Pda[p, 0, 0], Pda[p, 0, 1], Pda[p, 0, 2]), co, PX[p, 0])
-            lk.d_tangent_co_into((d0, d1, d2), (Pda[p, 1, 0], Pda[p, 1, 1], Pda[p, 1, 2]), co, PX[p, 1])
+        lk.d_tangent_co_into((d0, d1, d2), (Pda[p, 0, 0], Pda[p, 0, 1], Pda[p, 0, 2]), co, PX[p, 0])
+        lk.d_tangent_co_into((d0, d1, d2), (Pda[p, 1, 0], Pda[p, 1, 1], Pda[p, 1, 2]), co, PX[p, 1])
 
 
 @jit
@@ -575,7 +578,7 @@ def _force_to_local(e, fz, fr, Ti, f):
             f[e, 3 + c] -= Ti[i, c, 0] * e0 + Ti[i, c, 1] * e1 + Ti[i, c, 2] * e2
 
 
-@inl
+@jit
 def _geometric_core(s, g, F, Q, T, R, X0, X1, d, da, co, core, ns, with_uu, t0, t1, t2, t3, t4, t5):
     """core (slots) = G_xi^T Hf(s) G_xi + second variation contracted with g = D^T s (less the node terms).
 
@@ -783,7 +786,7 @@ def _section_cov(e, to_cart, weights, C, cblk, CT, Ch):
                         Ch[gg, r, c] += tk * CT[k, c]
 
 
-@inl
+@jit
 def _expand_core(core, ns, p, Y, Kz):
     """Kz += Pi^T core Pi (z padded, NZ) on the accumulation pattern (see _KR).
 
@@ -920,7 +923,7 @@ def _expand_core(core, ns, p, Y, Kz):
                 Kz[b + 5, k] += n5 * v
 
 
-@inl
+@jit
 def _expand_core_rot(core, ns, p, Y, Kz):
     """Kz += Pi^T core Pi restricted to the rotation columns (core without its translation-translation block)."""
     nr = 3 * ns
@@ -1461,7 +1464,7 @@ def _finish_tangent(e, Kz, Kiso, fr, Ti, f, fz, dn, ninv, K1, T0, K, Dp, Dm):
 # ----------------------------------------------------------------------------------------------------------
 
 
-@jit
+@_numba.entry
 def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
            used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
            pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
@@ -1485,7 +1488,7 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
         _node_setup(fr, dn, Ti, ninv, t0)
         _interpolate_points(used, dn, Pd, Pda)
         _point_coefficients(used, Pd, Pco)
-        _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, True)
+        _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX)
         _strains_points(e, used, e_ref, PF, Pe)
         if want_tangent:
             _section_cov(e, to_cart, weights, C, cblk, CT, Ch)
@@ -1515,82 +1518,24 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
         _finish_tangent(e, Kz, Kiso, fr, Ti, fv, fz, dn, ninv, K1, T0, K, t0, t1)
 
 
-@_numba.parallel
-def _batch(x_el, fr_el, e_ref, to_cart, weights, C, cblk,
-           used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
-           pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
-           par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
-           nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
-           want_tangent, use_stress, stress, n_chunks, f, fg, K):
-    m = x_el.shape[0]
-    npar = max(has_w.shape[0], 1)
+def _workspaces(npar: int, n_rf: int) -> tuple:
+    """The scratch arrays of one :func:`_chunk` call, in the order of its trailing arguments (x ... t5),
+    reused for every element of the chunk. ``npar``: nonlocal parameters (rows of the rank update), ``n_rf``
+    of them rotation-free."""
+    npar = max(npar, 1)
     n_rows = max(4 * ((npar + 3) // 4), n_rf + 4 * ((npar - n_rf + 3) // 4))
-    for ch in prange(n_chunks):
-        # per-chunk workspaces (a few chunks per thread), reused for every element of the chunk
-        x = np.empty((6, 3))
-        fr = np.empty((6, 3, 3))
-        dn = np.empty((6, 3))
-        Ti = np.empty((6, 3, 3))
-        ninv = np.empty((6, 2))
-        Pd = np.empty((N_EVAL, 3))
-        Pda = np.empty((N_EVAL, 2, 3))
-        Pco = np.empty((N_EVAL, 9))
-        PQ = np.empty((N_EVAL, 3, 3))
-        PT = np.empty((N_EVAL, 3, 3))
-        PR = np.empty((N_EVAL, 3, 3))
-        PF = np.empty((N_EVAL, 4, 3))
-        PX = np.empty((N_EVAL, 2, 3, 3))
-        Pe = np.empty((N_EVAL, 8))
-        Ps = np.empty((N_EVAL, 8))
-        F = np.empty((4, 3))
-        Q = np.empty((3, 3))
-        T = np.empty((3, 3))
-        R = np.empty((3, 3))
-        X0 = np.empty((3, 3))
-        X1 = np.empty((3, 3))
-        d = np.empty(3)
-        da = np.empty((2, 3))
-        co = np.empty(9)
-        s = np.empty(8)
-        g = np.empty(12)
-        G2 = np.empty((1, 12))
-        phi = np.empty((1, 18))
-        fz = np.empty((1, NZ))
-        cov = np.empty((N_GAUSS, 8))
-        st = np.empty((N_GAUSS, 8))
-        Ch = np.empty((N_GAUSS, 8, 8))
-        CT = np.empty((8, 8))
-        v16 = np.empty(16)
-        core = np.empty((18, 18))
-        Y = np.empty((18, NZ))
-        Yt = np.empty((NZ, 18))
-        Kz = np.empty((NZ, NZ))
-        K1 = np.empty((NZ, NZ))
-        T0 = np.empty((3, NDOF))
-        Kiso = np.empty((6, 8))
-        Dl = np.empty((8, 12))
-        Bl = np.empty((8, 18))
-        CBl = np.empty((8, 18))
-        Sp = np.empty((n_rows, NZ))
-        Wp = np.empty((max(n_rows, 8), NZ))
-        Cp = np.empty((npar, npar))
-        Yp = np.empty((8, npar))
-        t0 = np.empty((3, 3))
-        t1 = np.empty((3, 3))
-        t2 = np.empty((3, 3))
-        t3 = np.empty((3, 3))
-        t4 = np.empty((3, 3))
-        t5 = np.empty((3, 3))
-        _chunk((ch * m) // n_chunks, ((ch + 1) * m) // n_chunks, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
-               used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
-               pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
-               par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
-               nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
-               want_tangent, use_stress, stress, f, fg, K,
-               x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps,
-               F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz,
-               cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
-               t0, t1, t2, t3, t4, t5)
+    e = np.empty
+    return (e((6, 3)), e((6, 3, 3)), e((6, 3)), e((6, 3, 3)), e((6, 2)),                  # x fr dn Ti ninv
+            e((N_EVAL, 3)), e((N_EVAL, 2, 3)), e((N_EVAL, 9)), e((N_EVAL, 3, 3)),           # Pd Pda Pco PQ
+            e((N_EVAL, 3, 3)), e((N_EVAL, 3, 3)), e((N_EVAL, 4, 3)), e((N_EVAL, 2, 3, 3)),  # PT PR PF PX
+            e((N_EVAL, 8)), e((N_EVAL, 8)),                                                 # Pe Ps
+            e((4, 3)), e((3, 3)), e((3, 3)), e((3, 3)), e((3, 3)), e((3, 3)),               # F Q T R X0 X1
+            e(3), e((2, 3)), e(9), e(8), e(12), e((1, 12)), e((1, 18)), e((1, NZ)),         # d da co s g G2 phi fz
+            e((N_GAUSS, 8)), e((N_GAUSS, 8)), e((N_GAUSS, 8, 8)), e((8, 8)), e(16),         # cov st Ch CT v16
+            e((18, 18)), e((18, NZ)), e((NZ, 18)), e((NZ, NZ)), e((6, 8)), e((NZ, NZ)),     # core Y Yt Kz Kiso K1
+            e((3, NDOF)), e((8, 12)), e((8, 18)), e((8, 18)),                               # T0 Dl Bl CBl
+            e((n_rows, NZ)), e((max(n_rows, 8), NZ)), e((npar, npar)), e((8, npar)),        # Sp Wp Cp Yp
+            e((3, 3)), e((3, 3)), e((3, 3)), e((3, 3)), e((3, 3)), e((3, 3)))               # t0 .. t5
 
 
 @jit
@@ -1669,7 +1614,7 @@ def _strain_increments_points(e, used, fr, Ti, dh, PF, PQ, PT, PR, PX, dX, dD, d
         dPe[p, 7] = sv[2]
 
 
-@jit
+@_numba.entry
 def _chunk_strains(e0, e1, x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, out,
                    with_increment, dh, deps, x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, dX, dD, cov,
                    t0):
@@ -1679,7 +1624,7 @@ def _chunk_strains(e0, e1, x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a
         _node_setup(fr, dn, Ti, ninv, t0)
         _interpolate_points(used, dn, Pd, Pda)
         _point_coefficients(used, Pd, Pco)
-        _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX, with_increment)
+        _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX)
         _strains_points(e, used, e_ref, PF, Pe)
         _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, out)
         if with_increment:
@@ -1687,32 +1632,13 @@ def _chunk_strains(e0, e1, x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a
             _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, deps)
 
 
-@_numba.parallel
-def _batch_strains(x_el, fr_el, e_ref, to_cart, used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, n_chunks, out,
-                   with_increment, dh, deps):
-    m = x_el.shape[0]
-    for ch in prange(n_chunks):
-        x = np.empty((6, 3))
-        fr = np.empty((6, 3, 3))
-        dn = np.empty((6, 3))
-        Ti = np.empty((6, 3, 3))
-        ninv = np.empty((6, 2))
-        Pd = np.empty((N_EVAL, 3))
-        Pda = np.empty((N_EVAL, 2, 3))
-        Pco = np.empty((N_EVAL, 9))
-        PQ = np.empty((N_EVAL, 3, 3))
-        PT = np.empty((N_EVAL, 3, 3))
-        PR = np.empty((N_EVAL, 3, 3))
-        PF = np.empty((N_EVAL, 4, 3))
-        PX = np.empty((N_EVAL, 2, 3, 3))
-        Pe = np.empty((N_EVAL, 8))
-        dX = np.empty((10, 3))
-        dD = np.empty((6, 3))
-        cov = np.empty((N_GAUSS, 8))
-        t0 = np.empty((3, 3))
-        _chunk_strains((ch * m) // n_chunks, ((ch + 1) * m) // n_chunks, x_el, fr_el, e_ref, to_cart, used,
-                       a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, out, with_increment, dh, deps,
-                       x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, dX, dD, cov, t0)
+def _strain_workspaces() -> tuple:
+    """The scratch arrays of one :func:`_chunk_strains` call, in the order of its trailing arguments."""
+    e = np.empty
+    return (e((6, 3)), e((6, 3, 3)), e((6, 3)), e((6, 3, 3)), e((6, 2)),                  # x fr dn Ti ninv
+            e((N_EVAL, 3)), e((N_EVAL, 2, 3)), e((N_EVAL, 9)), e((N_EVAL, 3, 3)),           # Pd Pda Pco PQ
+            e((N_EVAL, 3, 3)), e((N_EVAL, 3, 3)), e((N_EVAL, 4, 3)), e((N_EVAL, 2, 3, 3)),  # PT PR PF PX
+            e((N_EVAL, 8)), e((10, 3)), e((6, 3)), e((N_GAUSS, 8)), e((3, 3)))              # Pe dX dD cov t0
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -1958,13 +1884,6 @@ def _checked_section(section: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return hit
 
 
-def _n_chunks(m: int) -> int:
-    """Parallel chunks: a few per thread, and one (no thread hand-off) for small batches."""
-    if m < 128:
-        return 1
-    return max(1, min(m, 4 * numba.get_num_threads()))
-
-
 def _element_arrays(x_el, frames_el, e_ref, to_cart, **more):
     """The kernels' per-element inputs as contiguous float64 arrays, their shapes and common length checked.
 
@@ -2011,8 +1930,11 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
     fs = np.empty((m, NDOF)) if use_stress else np.empty((1, NDOF))
     K = np.empty((m, NDOF, NDOF)) if want_tangent else np.empty((1, NDOF, NDOF))
     if m:
-        _batch(x_el, frames_el, e_ref, to_cart, weights, C, cblk, *maps.kernel_args(),
-               bool(want_tangent), use_stress, stress, _n_chunks(m), f, fs, K)
+        args = (x_el, frames_el, e_ref, to_cart, weights, C, cblk, *maps.kernel_args(),
+                bool(want_tangent), use_stress, stress, f, fs, K)
+        key, npar, n_rf = ("mitc6", maps.npar, maps.n_rf), maps.npar, maps.n_rf
+        run_chunks(lambda e0, e1: _chunk(e0, e1, *args, *scratch(key, lambda: _workspaces(npar, n_rf))), m,
+                   _n_chunks(m))
     if use_stress:
         return f, (K if want_tangent else None), fs
     return f, (K if want_tangent else None)
@@ -2029,8 +1951,10 @@ def element_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.nda
     maps = compress_maps(A)
     out = np.empty((m, N_GAUSS, 8))
     if m:
-        _batch_strains(x_el, frames_el, e_ref, to_cart, *maps.nonzeros(), _n_chunks(m), out,
-                       False, np.zeros((1, NDOF)), np.zeros((1, N_GAUSS, 8)))
+        args = (x_el, frames_el, e_ref, to_cart, *maps.nonzeros(), out, False, np.zeros((1, NDOF)),
+                np.zeros((1, N_GAUSS, 8)))
+        run_chunks(lambda e0, e1: _chunk_strains(e0, e1, *args, *scratch(("strains",), _strain_workspaces)), m,
+                   _n_chunks(m))
     return out
 
 
@@ -2048,5 +1972,7 @@ def linearized_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.
     eps = np.empty((m, N_GAUSS, 8))
     deps = np.empty((m, N_GAUSS, 8))
     if m:
-        _batch_strains(x_el, frames_el, e_ref, to_cart, *maps.nonzeros(), _n_chunks(m), eps, True, dh_el, deps)
+        args = (x_el, frames_el, e_ref, to_cart, *maps.nonzeros(), eps, True, dh_el, deps)
+        run_chunks(lambda e0, e1: _chunk_strains(e0, e1, *args, *scratch(("strains",), _strain_workspaces)), m,
+                   _n_chunks(m))
     return eps, deps

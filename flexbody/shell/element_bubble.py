@@ -52,11 +52,10 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import numba
 import numpy as np
-from numba import prange
 
 from flexbody import _numba
+from flexbody.chunks import n_chunks, run_chunks
 from flexbody.lie import kernels as lk
 from flexbody.shell.bubble import BUBBLE_MAX_ITERATIONS, BUBBLE_TOL, bubble_step
 from flexbody.shell.element import _element_arrays
@@ -803,7 +802,7 @@ def _workspace():
             np.zeros(8), np.zeros(8), np.zeros(8), np.zeros(8))     # cov eps sig tq
 
 
-@jit
+@_numba.released
 def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, a_ptr, a_i, a_p, a_j, a_v, used,
            EN, EDN, ENB, EDNB, b0, want_tangent, c_sym, tol, max_iter, f, K, b_out):
     ws = _workspace()
@@ -875,16 +874,6 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, a_ptr, a_i, a_p, a_j
             f[e, c] = fa[c]
 
 
-@_numba.parallel
-def _batch(x_el, fr_el, e_ref, to_cart, weights, C, a_ptr, a_i, a_p, a_j, a_v, used,
-           EN, EDN, ENB, EDNB, b0, want_tangent, c_sym, tol, max_iter, n_chunks, f, K, b_out):
-    m = x_el.shape[0]
-    for ch in prange(n_chunks):
-        _chunk((ch * m) // n_chunks, ((ch + 1) * m) // n_chunks, x_el, fr_el, e_ref, to_cart, weights, C,
-               a_ptr, a_i, a_p, a_j, a_v, used, EN, EDN, ENB, EDNB, b0, want_tangent, c_sym, tol, max_iter,
-               f, K, b_out)
-
-
 # ----------------------------------------------------------------------------------------------------------
 # Python entry point
 # ----------------------------------------------------------------------------------------------------------
@@ -932,11 +921,9 @@ def _map_nonzeros(A: np.ndarray | MapNonzeros) -> MapNonzeros:
 
 
 def _n_chunks(m: int) -> int:
-    """Parallel chunks: a few per thread, one for small batches (a lower threshold than element.py's: an
-    MITC7 element costs about four MITC6 elements)."""
-    if m < 16:
-        return 1
-    return max(1, min(m, 4 * numba.get_num_threads()))
+    """Chunks: a lower threshold for threads than element.py's (an MITC7 element costs about four MITC6
+    elements)."""
+    return n_chunks(m, min_parallel=16)
 
 
 def condensed_force_tangent_batch(x_el: np.ndarray, fr_el: np.ndarray, e_ref: np.ndarray, to_cart: np.ndarray,
@@ -980,7 +967,8 @@ def condensed_force_tangent_batch(x_el: np.ndarray, fr_el: np.ndarray, e_ref: np
     K = np.empty((m, NDOF, NDOF)) if want_tangent else np.empty((0, NDOF, NDOF))
     b = np.empty((m, 2))
     if m:
-        _batch(x_el, fr_el, e_ref, to_cart, weights, C, ptr, ai, ap, aj, av, used, _EN, _EDN, _ENB, _EDNB,
-               b0, bool(want_tangent), bool(np.array_equal(C, C.T)), float(BUBBLE_TOL), int(BUBBLE_MAX_ITERATIONS),
-               _n_chunks(m), f, K, b)
+        args = (x_el, fr_el, e_ref, to_cart, weights, C, ptr, ai, ap, aj, av, used, _EN, _EDN, _ENB, _EDNB,
+                b0, bool(want_tangent), bool(np.array_equal(C, C.T)), float(BUBBLE_TOL), int(BUBBLE_MAX_ITERATIONS),
+                f, K, b)
+        run_chunks(lambda e0, e1: _chunk(e0, e1, *args), m, _n_chunks(m))
     return f, K, b
