@@ -116,9 +116,10 @@ def fit_frequencies(t: np.ndarray, c: np.ndarray, guesses: list[float],
 
 def mode_frequency(t: np.ndarray, c: np.ndarray, near: float, count: int = 3,
                    seeds: list[float] | None = None) -> tuple[float, float, float]:
-    """The frequency of ``c`` nearest to ``near`` (rad/s): the fit of :func:`fit_frequencies` started on the
-    ``count`` largest spectral peaks and, where given, on ``seeds`` (a record of a few periods, whose spectral
-    peaks merge): the fit with the smaller residual. Returns (fitted, FFT peak nearest to ``near``, fit's relative residual)."""
+    """The frequency of ``c`` nearest to ``near`` (rad/s; the same mesh's modal (n, 0)): the fit of
+    :func:`fit_frequencies` started on the ``count`` largest spectral peaks and, where given, on ``seeds`` (a
+    record of a few periods, whose spectral peaks merge), the fit with the smaller residual; a start at
+    ``near`` is added where no peak is within 5 % of it. Returns (fitted, FFT peak nearest to ``near``, fit's relative residual)."""
     peaks = spectrum_peaks(t, c, count)
     fft_peak = min(peaks, key=lambda p: abs(p - near)) if peaks else float("nan")
     if not any(abs(p / near - 1) < 0.05 for p in peaks):
@@ -365,7 +366,8 @@ def main() -> None:
     t.add_argument("--json", default=None, help="the merged table")
     a = sub.add_parser("analyse")
     a.add_argument("files", nargs="+")
-    a.add_argument("--reference", default=None, help="the JSON of `modal --json`")
+    a.add_argument("--reference", required=True, help="the JSON of `modal --json` or `table --json` (the modal "
+                   "(n, 0) of each record's mesh picks its mode; the extrapolated value is the converged one)")
     a.add_argument("--windows", default="1,2,5,10,20,40", help="revolutions from the start analysed per record")
     args = parser.parse_args()
     if args.what == "modal":
