@@ -197,7 +197,7 @@ def richardson(f1: float, f2: float, f3: float) -> tuple[float, float]:
     if d1 * d2 <= 0:
         return float("nan"), float("nan")
     p = math.log2(d1 / d2)
-    return f3 + d2 / (2 ** p - 1), p
+    return f3 - d2 / (2 ** p - 1), p
 
 
 def modal_study(cells: list[int], thickness: list[float], out: str | None, shift: float | None = None) -> None:
