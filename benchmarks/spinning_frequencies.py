@@ -118,12 +118,9 @@ def mode_frequency(t: np.ndarray, c: np.ndarray, near: float, count: int = 3,
                    seeds: list[float] | None = None) -> tuple[float, float, float]:
     """The frequency of ``c`` nearest to ``near`` (rad/s; the same mesh's modal (n, 0)): the fit of
     :func:`fit_frequencies` started on the ``count`` largest spectral peaks and, where given, on ``seeds`` (a
-    record of a few periods, whose spectral peaks merge), the fit with the smaller residual; a start at
-    ``near`` is added where no peak is within 5 % of it. Returns (fitted, FFT peak nearest to ``near``, fit's relative residual)."""
+    record of a few periods, whose spectral peaks merge), the fit with the smaller residual. Returns (fitted, FFT peak nearest to ``near``, fit's relative residual)."""
     peaks = spectrum_peaks(t, c, count)
     fft_peak = min(peaks, key=lambda p: abs(p - near)) if peaks else float("nan")
-    if not any(abs(p / near - 1) < 0.05 for p in peaks):
-        peaks = sorted(peaks + [near])        # no peak near the mode (a short record): start one there
     fits = [fit_frequencies(t, c, start) for start in ([peaks, list(seeds)] if seeds else [peaks])]
     w, amp, rel = min(fits, key=lambda f: f[2])
     return float(w[np.argmin(np.abs(w - near))]), float(fft_peak), rel
