@@ -1,24 +1,27 @@
 """Refinement of the kicked spinning annulus: transverse frequencies per nodal diameter, modal and transient.
 
-    python benchmarks/spinning_frequencies.py modal [--cells 4,8,16] [--thickness 1e-3,1e-6]
+    python benchmarks/spinning_frequencies.py modal [--cells 4,8,16] [--thickness 1e-3] [--shift 400] [--json F]
     python benchmarks/spinning_frequencies.py run --cells 4 --thickness 1e-3 --revolutions 20 --save FILE.npz
     python benchmarks/spinning_frequencies.py table modal.json modal32.json [--json merged.json]
     python benchmarks/spinning_frequencies.py synthetic
-    python benchmarks/spinning_frequencies.py analyse FILE.npz [FILE.npz ...] [--reference modal.json]
+    python benchmarks/spinning_frequencies.py analyse FILE.npz [FILE.npz ...] --reference reference.json
 
 The hub annulus of ``benchmarks/spinning_membranes.py`` (a = 0.2, b = 1, E = 1e9, nu = 0.3, rho = 1000, clamped
 to a hub turning at Omega = 20 rad/s, n_radial x 8 n_radial cells), the same scene text.
 
-* ``modal``: the transverse frequencies (n, 0) and (n, 1), n = 0..3, in the turning frame from
+* ``modal``: the transverse frequencies (n, 0), n = 0..3, and (0, 1) in the turning frame from
   ``flexbody.modal`` about the steady spin of that scene's model (the hub turning: its Coriolis and centrifugal
   terms), per mesh; a Richardson extrapolation of the three finest meshes gives the converged value; the 1-D
   membrane reference (``tests/membrane_reference.py``, hub u(a) = 0) beside it. ``--json`` keeps the table.
+  ``--shift 400`` (Omega^2) at h/R 1e-6: the default shift of ``flexbody.modal`` grows like 1/h^2 there.
+* ``table``: the tables of several ``modal --json`` files as one, with the extrapolation; ``synthetic``: the
+  decomposition and the fit on a synthetic ring of known frequencies.
 * ``run``: the kicked scene (v_z = 0.05 (r - a)/(b - a) sum_{n<4} cos n theta) at default settings, 100 steps per
   revolution; every step the transverse displacement w of every rim node (a material node: it turns with the
   membrane, and w is along the spin axis, so its history is the turning frame's) and the CPU time so far, saved
   to ``--save`` (NPZ) every 10 steps, so that a run stopped early keeps what it did.
 * ``analyse``: per nodal diameter n the ring's Fourier component w_n(t) = (1/N) sum_rim w cos(n theta) (n = 0..3;
-  the kick has cos terms only), then its frequencies by a least-squares fit of a sum of damped sinusoids started
+  the kick has cos terms only), then its frequencies by a least-squares fit of a sum of sinusoids started
   on the peaks of its spectrum (:func:`fit_frequencies`); for the first R revolutions of each record (the CPU
   time up to there), the error of the (n, 0) frequency against the modal reference: error against run time.
 """
