@@ -247,9 +247,11 @@ class Model:
     # -- sizes -------------------------------------------------------------------------------------------
     @property
     def n_dof(self) -> int:
+        """The number of free DoFs (five per node less the constrained components)."""
         return int(self.free.size)
 
     def initial_state(self) -> ShellState:
+        """The body's reference configuration."""
         return self.body.initial_state()
 
     def warm_up(self) -> None:

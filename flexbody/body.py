@@ -45,6 +45,7 @@ class ShellState:
             self.local = np.asarray(self.x, dtype=float) - self.origin
 
     def copy(self) -> "ShellState":
+        """A deep copy (the origin is shared: it never changes)."""
         return ShellState(self.x.copy(), self.frames.copy(), None if self.stress is None else self.stress.copy(),
                           self.local.copy(), self.origin)
 
@@ -60,6 +61,7 @@ class ShellState:
 
     @property
     def directors(self) -> np.ndarray:
+        """The directors t_I = R_I e3 (n, 3)."""
         return self.frames[:, :, 2]
 
 
@@ -159,11 +161,13 @@ class ShellBody:
 
     # -- state -------------------------------------------------------------------------------------------
     def initial_state(self) -> ShellState:
+        """The reference configuration: the mesh's positions and the reference frames."""
         x = self.mesh.nodes.astype(float)
         return ShellState(x.copy(), self.frames0.copy(), local=x - self.origin, origin=self.origin)
 
     @property
     def n_nodes(self) -> int:
+        """The number of nodes of the mesh."""
         return self.mesh.n_nodes
 
     # -- element evaluation -------------------------------------------------------------------------------

@@ -8,11 +8,16 @@ gets a fixed translation basis E_I (columns = directions) and solves delta x_I =
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexbody.frames import unit_vector
+
+if TYPE_CHECKING:
+    from flexbody.mesh.tri6 import Tri6Mesh
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -54,6 +59,7 @@ class Fix:
         object.__setattr__(self, "components", comps)
 
     def expanded(self) -> set[str]:
+        """The fixed components with the shorthands spelled out (a subset of x, y, z, r1, r2)."""
         out: set[str] = set()
         for c in self.components:
             if c == "all":
@@ -110,3 +116,75 @@ def basis_with_first(direction: np.ndarray) -> np.ndarray:
     b = np.cross(d, helper)
     b /= np.linalg.norm(b)
     return np.column_stack([d, b, np.cross(d, b)])
+
+
+def nodes_of(mesh: "Tri6Mesh", nodes: str | Sequence[str] | Sequence[int] | np.ndarray) -> np.ndarray:
+    """The node indices of a selection: a node or edge set name, a list of set names (their union), or node
+    indices.
+
+    Parameters
+    ----------
+    mesh : Tri6Mesh
+        The mesh whose sets are named.
+    nodes : str, list of str, or array_like of int
+        The selection.
+
+    Returns
+    -------
+    np.ndarray
+        The sorted, distinct node indices.
+
+    Raises
+    ------
+    ValueError
+        An unknown set name (a :class:`flexbody.mesh.MeshError` listing the sets the mesh has), an empty
+        selection or an index outside the mesh.
+    """
+    if isinstance(nodes, str):
+        nodes = [nodes]
+    if isinstance(nodes, (list, tuple)) and nodes and all(isinstance(n, str) for n in nodes):
+        return np.unique(np.concatenate([mesh.node_set(n) for n in nodes]))
+    indices = np.unique(node_indices(nodes, "selected"))
+    if indices.size == 0:
+        raise ValueError("the node selection is empty")
+    if indices[0] < 0 or indices[-1] >= mesh.n_nodes:
+        bad = indices[(indices < 0) | (indices >= mesh.n_nodes)][0]
+        raise ValueError(f"node {bad} does not exist; the mesh has nodes 0..{mesh.n_nodes - 1}")
+    return indices
+
+
+def clamp(mesh: "Tri6Mesh", nodes: str | Sequence[str] | Sequence[int] | np.ndarray) -> Fix:
+    """Clamp nodes: their translations and rotations are fixed (``Fix(nodes, "all")``).
+
+    Parameters
+    ----------
+    mesh : Tri6Mesh
+        The mesh.
+    nodes : str, list of str, or array_like of int
+        Node or edge set name(s), or node indices (:func:`nodes_of`).
+
+    Examples
+    --------
+    >>> import flexbody as fb
+    >>> mesh = fb.strip(10.0, 1.0, 4, 1)
+    >>> fb.clamp(mesh, "clamped").nodes.tolist()
+    [0, 1, 2]
+    """
+    return Fix(nodes_of(mesh, nodes), "all")
+
+
+def fix(mesh: "Tri6Mesh", nodes: str | Sequence[str] | Sequence[int] | np.ndarray,
+        components: str | Sequence[str] = "all") -> Fix:
+    """Fix some components of nodes.
+
+    Parameters
+    ----------
+    mesh : Tri6Mesh
+        The mesh.
+    nodes : str, list of str, or array_like of int
+        Node or edge set name(s), or node indices (:func:`nodes_of`).
+    components : str or sequence of str
+        Any of "x", "y", "z" (global translations), "r1", "r2" (rotations about the nodal in-plane axes), or
+        "all", "translations", "rotations" (see :class:`Fix`).
+    """
+    return Fix(nodes_of(mesh, nodes), components)

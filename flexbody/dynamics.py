@@ -303,6 +303,7 @@ class DynamicModel:
     # -- sizes, loads ------------------------------------------------------------------------------------
     @property
     def n_dof(self) -> int:
+        """The number of free DoFs (those of the static model)."""
         return self.model.n_dof
 
     @property

@@ -4,16 +4,26 @@ Every load returns its contribution to the nodal *local-frame* external force (n
 components in R_I, and, where it depends on the configuration, its tangent. Dead loads are fixed in
 space, follower loads turn with the nodes (a follower nodal load is constant in the local frame) or with the
 surface (follower pressure).
+
+Distributed loads as one-liners (each returns what a :class:`flexbody.assembly.Model` takes, built as the
+TOML scene files build them): :func:`edge_force` and :func:`edge_moment` (a line density on edge sets),
+:func:`surface_force` (a dead area density) and :func:`pressure` (a follower pressure on all elements or on
+element sets).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexbody.lie import so3
 from flexbody.shell.shape import gauss_triangle_7, shape_derivatives, shape_functions
+
+if TYPE_CHECKING:
+    from flexbody.mesh.tri6 import Tri6Mesh
 
 
 def _as_vector(value, name: str) -> np.ndarray:
@@ -67,11 +77,15 @@ def nodal_vectors_from_edges(nodes: np.ndarray, edges: np.ndarray, density: np.n
     return out
 
 
-def nodal_vectors_from_area(mesh, density: np.ndarray) -> np.ndarray:
-    """Consistent nodal vectors of a dead area density (per unit reference area)."""
+def nodal_vectors_from_area(mesh: "Tri6Mesh", density: np.ndarray, elements: np.ndarray | None = None) -> np.ndarray:
+    """Consistent nodal vectors (n, 3) of a dead area density (per unit reference area).
+
+    ``elements``: the loaded elements (default: all).
+    """
     out = np.zeros((mesh.n_nodes, 3))
     pts, wts = gauss_triangle_7()
-    for conn in mesh.elements:
+    conns = mesh.elements if elements is None else mesh.elements[np.asarray(elements, dtype=int)]
+    for conn in conns:
         X = mesh.nodes[conn]
         for (r, s), w in zip(pts, wts):
             dX = shape_derivatives(r, s) @ X
@@ -80,12 +94,190 @@ def nodal_vectors_from_area(mesh, density: np.ndarray) -> np.ndarray:
     return out
 
 
+def nodal_loads(vectors: np.ndarray, kind: str = "force") -> list[NodalLoad]:
+    """One dead :class:`NodalLoad` per node with a nonzero row of ``vectors`` (n, 3).
+
+    Parameters
+    ----------
+    vectors : np.ndarray
+        Nodal forces or moments (n, 3), e.g. from :func:`nodal_vectors_from_edges`.
+    kind : str
+        "force" or "moment": what the rows are.
+
+    Returns
+    -------
+    list[NodalLoad]
+        The loads, in node order.
+    """
+    if kind not in ("force", "moment"):
+        raise ValueError(f"kind must be 'force' or 'moment', got {kind!r}")
+    vectors = np.asarray(vectors, dtype=float)
+    nodes = np.flatnonzero(np.any(vectors != 0, axis=1))
+    return [NodalLoad([i], **{kind: vectors[i]}) for i in nodes]
+
+
+def _set_names(sets: str | Sequence[str], what: str) -> list[str]:
+    """One set name or a list of distinct names, checked."""
+    names = [sets] if isinstance(sets, str) else sets
+    if (not isinstance(names, (list, tuple)) or not names
+            or not all(isinstance(n, str) and n for n in names)):
+        raise ValueError(f"{what} must be a set name or a list of set names, got {sets!r}")
+    twice = [n for k, n in enumerate(names) if n in names[:k]]
+    if twice:
+        raise ValueError(f"{what} lists {twice[0]!r} twice, got {sets!r}")
+    return list(names)
+
+
+def edges_of(mesh: "Tri6Mesh", sets: str | Sequence[str] | np.ndarray) -> np.ndarray:
+    """The (k, 3) edges (corner, midside, corner) of edge sets: their union, each edge once even where the
+    sets overlap.
+
+    Parameters
+    ----------
+    mesh : Tri6Mesh
+        The mesh whose ``edge_sets`` are named.
+    sets : str, list of str or np.ndarray
+        An edge set name, a list of names, or the (k, 3) edge triples themselves.
+
+    Raises
+    ------
+    ValueError
+        A name the mesh does not have (a :class:`flexbody.mesh.MeshError` listing the edge sets it has), a
+        name listed twice, or edge triples of the wrong shape.
+    """
+    if isinstance(sets, np.ndarray):
+        if sets.ndim != 2 or sets.shape[1] != 3 or sets.shape[0] == 0:
+            raise ValueError(f"edges must be a non-empty array of shape (k, 3), got shape {sets.shape}")
+        edges = sets.astype(np.int64)
+    else:
+        edges = np.vstack([mesh.edge_set(n) for n in _set_names(sets, "edge sets")])
+    _, first = np.unique(np.sort(edges[:, [0, 2]], axis=1), axis=0, return_index=True)
+    return edges[np.sort(first)]
+
+
+def edge_force(mesh: "Tri6Mesh", sets: str | Sequence[str] | np.ndarray,
+               density: Sequence[float] | np.ndarray) -> list[NodalLoad]:
+    """A dead force per unit reference length on edges, as consistent nodal forces.
+
+    Parameters
+    ----------
+    mesh : Tri6Mesh
+        The mesh.
+    sets : str, list of str or np.ndarray
+        The loaded edges: edge set name(s) or (k, 3) edge triples (:func:`edges_of`).
+    density : array_like
+        The force per unit length (3,), global components.
+
+    Returns
+    -------
+    list[NodalLoad]
+        One load per loaded node (what the TOML ``type = "edge_force"`` builds), scaled by the load factor
+        like every load.
+
+    Examples
+    --------
+    >>> import flexbody as fb
+    >>> mesh = fb.strip(10.0, 1.0, 4, 1)
+    >>> loads = fb.edge_force(mesh, "tip", [0.0, 0.0, 2.0])
+    >>> round(float(sum(load.force[2] for load in loads)), 12)      # density x edge length
+    2.0
+    """
+    vectors = nodal_vectors_from_edges(mesh.nodes, edges_of(mesh, sets), _as_vector(density, "edge force density"),
+                                       mesh.n_nodes)
+    return nodal_loads(vectors, "force")
+
+
+def edge_moment(mesh: "Tri6Mesh", sets: str | Sequence[str] | np.ndarray,
+                density: Sequence[float] | np.ndarray) -> list[NodalLoad]:
+    """A dead moment per unit reference length on edges, as consistent nodal moments.
+
+    Parameters
+    ----------
+    mesh : Tri6Mesh
+        The mesh.
+    sets : str, list of str or np.ndarray
+        The loaded edges: edge set name(s) or (k, 3) edge triples (:func:`edges_of`).
+    density : array_like
+        The moment per unit length (3,), global components (the part about a director does no work).
+
+    Returns
+    -------
+    list[NodalLoad]
+        One load per loaded node (the TOML ``type = "edge_moment"``).
+    """
+    vectors = nodal_vectors_from_edges(mesh.nodes, edges_of(mesh, sets), _as_vector(density, "edge moment density"),
+                                       mesh.n_nodes)
+    return nodal_loads(vectors, "moment")
+
+
+def elements_of(mesh: "Tri6Mesh", sets: str | Sequence[str] | np.ndarray | None) -> np.ndarray | None:
+    """The element indices of element sets (their union, sorted), or None for None (all elements).
+
+    ``sets``: an element set name, a list of names, or element indices.
+    """
+    if sets is None:
+        return None
+    if isinstance(sets, str) or (isinstance(sets, (list, tuple)) and sets and all(isinstance(n, str) for n in sets)):
+        return np.unique(np.concatenate([mesh.element_set(n) for n in _set_names(sets, "element sets")]))
+    elems = np.atleast_1d(np.asarray(sets))
+    if elems.size == 0 or not np.issubdtype(elems.dtype, np.integer) or elems.min() < 0 \
+            or elems.max() >= mesh.n_elements:
+        raise ValueError(f"elements must be element set names or indices in 0..{mesh.n_elements - 1}, got {sets!r}")
+    return np.unique(elems)
+
+
+def surface_force(mesh: "Tri6Mesh", density: Sequence[float] | np.ndarray,
+                  elements: str | Sequence[str] | np.ndarray | None = None) -> list[NodalLoad]:
+    """A dead force per unit reference area, as consistent nodal forces.
+
+    Parameters
+    ----------
+    mesh : Tri6Mesh
+        The mesh.
+    density : array_like
+        The force per unit area (3,), global components (e.g. a self-weight rho h g).
+    elements : str, list of str, np.ndarray or None
+        The loaded elements: element set name(s) or indices (default: all; :func:`elements_of`).
+
+    Returns
+    -------
+    list[NodalLoad]
+        One load per loaded node (the TOML ``type = "surface_force"``).
+    """
+    vectors = nodal_vectors_from_area(mesh, _as_vector(density, "surface force density"), elements_of(mesh, elements))
+    return nodal_loads(vectors, "force")
+
+
 @dataclass(frozen=True)
 class FollowerPressure:
     """Pressure p on the current surface, acting along the director side normal (x_,r x x_,s)."""
 
     pressure: float
     elements: np.ndarray | None = None  # None: all elements
+
+
+def pressure(mesh: "Tri6Mesh", value: float, elements: str | Sequence[str] | np.ndarray | None = None
+             ) -> FollowerPressure:
+    """A follower pressure on the current surface (positive along the director side normal).
+
+    Parameters
+    ----------
+    mesh : Tri6Mesh
+        The mesh.
+    value : float
+        The pressure at load factor 1.
+    elements : str, list of str, np.ndarray or None
+        The loaded elements: element set name(s) (a mesh file's physical surfaces) or indices; default all.
+
+    Returns
+    -------
+    FollowerPressure
+        The load (the TOML ``type = "pressure"``).
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) \
+            or not np.isfinite(value):
+        raise ValueError(f"pressure must be a finite number, got {value!r}")
+    return FollowerPressure(float(value), elements_of(mesh, elements))
 
 
 def pressure_contribution(mesh, x: np.ndarray, p: float, elements=None):

@@ -32,11 +32,16 @@ applied moment on the end-moment strip (measured, docs/output_formats.md).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexbody.shell.geometry import EVAL_DN, GAUSS_OFFSET, GAUSS_POINTS, N_GAUSS
 from flexbody.shell.shape import shape_derivatives, shape_functions
+
+if TYPE_CHECKING:
+    from flexbody.assembly import Model
+    from flexbody.body import ShellBody, ShellState
 
 #: names of the 8 resultant components, in the order of the section law
 COMPONENTS = ("N11", "N22", "N12", "M11", "M22", "M12", "Q1", "Q2")
@@ -165,7 +170,7 @@ class Resultants:
         return float(self.element_energy.sum())
 
 
-def stress_resultants(body, state) -> Resultants:
+def stress_resultants(body: "ShellBody", state: "ShellState") -> Resultants:
     """The stress resultants of ``state`` (:class:`Resultants`) of a :class:`flexbody.body.ShellBody`."""
     eps = gauss_strains(body, state)
     sigma = eps @ body.material.section().T
@@ -251,7 +256,8 @@ def support_projectors(model) -> tuple[np.ndarray, np.ndarray]:
     return P, mask
 
 
-def reactions(model, state, lam=1.0, gravity_force: np.ndarray | None = None) -> Reactions:
+def reactions(model: "Model", state: "ShellState", lam: float | np.ndarray = 1.0,
+              gravity_force: np.ndarray | None = None) -> Reactions:
     """The support reactions of ``state`` at load factor ``lam`` (a number or one factor per load group).
 
     ``gravity_force`` : nodal gravity forces m_I g (n, 3) of a dynamic model (they load the supports too).

@@ -146,6 +146,10 @@ class AlphaParameters:
 
 @dataclass
 class AlphaSettings:
+    """Settings of the generalized-alpha integrator: rho_inf, the Newton tolerances and iteration-matrix
+    policy, cut-backs of failing steps, and the error-controlled (adaptive) time steps (each field is
+    described where it is declared; the module docstring gives the method)."""
+
     rho_inf: float = 0.9
     rtol: float = 1e-8            # weighted RMS norm: relative part (of the step increment)
     atol: float = 1e-10           # the floor, times the DoF scale (model size, 1 rad): scale-free too

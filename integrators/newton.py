@@ -23,6 +23,10 @@ from integrators.linear import LinearSolver, SingularMatrixError
 
 @dataclass
 class NewtonSettings:
+    """Settings of the Newton iteration of the static solvers: the convergence tests, the tangent policy
+    ("full" or "modified"), line search, the lazy tangent near convergence and the mixed iteration (each
+    field is described where it is declared)."""
+
     rtol: float = 1e-8            # ||r|| <= rtol * reference force (the model's own: no absolute floor)
     increment_tol: float = 1e-11  # or: max |dq_i / scale_i| <= increment_tol (round-off floor reached)
     max_iterations: int = 25

@@ -240,11 +240,10 @@ def test_a_set_listed_twice_in_a_load_is_refused(tmp_path):
 
 
 def test_overlapping_edge_sets_load_each_edge_once(tmp_path):
-    from flexbody.scenes.toml_scene import _edges
-    from flexbody.scenes.toml_values import Table
+    from flexbody.loads import edges_of           # what the TOML edge loads use (moved from toml_scene._edges)
     mesh = MESH.with_sets(edge_sets={"tip_reversed": MESH.edge_set("tip")[::-1, ::-1],
                                      "tip_and_top": np.vstack([MESH.edge_set("tip"), MESH.edge_set("top")])})
-    edges = _edges(Table({"set": ["tip_reversed", "tip_and_top"]}, "load.0", "test"), mesh)
+    edges = edges_of(mesh, ["tip_reversed", "tip_and_top"])
     assert len(edges) == len(MESH.edge_set("tip")) + len(MESH.edge_set("top"))
     density = np.array([0.0, 0.0, 1.0])
     union = nodal_vectors_from_edges(mesh.nodes, edges, density, mesh.n_nodes)

@@ -86,10 +86,12 @@ class Tri6Mesh:
     # -- sizes ------------------------------------------------------------------------------------------
     @property
     def n_nodes(self) -> int:
+        """The number of nodes."""
         return len(self.nodes)
 
     @property
     def n_elements(self) -> int:
+        """The number of elements (six-node triangles)."""
         return len(self.elements)
 
     # -- sets -------------------------------------------------------------------------------------------

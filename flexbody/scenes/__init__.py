@@ -6,10 +6,10 @@ from flexbody.scenes.builtin import BUILTIN, build
 from flexbody.scenes.reference import Reference
 from flexbody.scenes.runner import run_scene
 from flexbody.scenes.scene import Scene
-from flexbody.scenes.sources import SceneError, open_scene
+from flexbody.scenes.sources import SceneError, load_scene, open_scene
 from flexbody.scenes.toml_scene import load_toml_scene
 from flexbody.scenes.tracked import AngularVelocity, Output, RadialDisplacement
 
 __all__ = ["Output", "RadialDisplacement", "AngularVelocity", "Reference", "Scene", "StaticAnalysis",
            "DynamicAnalysis", "run_scene", "BUILTIN", "build", "SceneError",
-           "open_scene", "load_toml_scene"]
+           "load_scene", "open_scene", "load_toml_scene"]

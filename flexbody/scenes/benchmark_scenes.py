@@ -14,7 +14,7 @@ import numpy as np
 from flexbody.assembly import Model
 from flexbody.body import ShellBody
 from flexbody.constraints import Fix, Symmetry
-from flexbody.loads import NodalLoad, nodal_vectors_from_edges
+from flexbody.loads import NodalLoad, nodal_loads, nodal_vectors_from_edges
 from flexbody.mesh import generators
 from flexbody.scenes.analysis import StaticAnalysis
 from flexbody.scenes.reference import Reference, read_reference_csv
@@ -26,9 +26,7 @@ from integrators.newton import NewtonSettings
 
 
 def _loads_from_nodal(vectors: np.ndarray, moment: bool = False) -> list[NodalLoad]:
-    nodes = np.flatnonzero(np.any(vectors != 0, axis=1))
-    key = "moment" if moment else "force"
-    return [NodalLoad(nodes=[i], **{key: vectors[i]}) for i in nodes]
+    return nodal_loads(vectors, "moment" if moment else "force")
 
 
 def cantilever_end_moment(nx: int = 16, ny: int = 1, thickness: float = 0.01, steps: int = 20,

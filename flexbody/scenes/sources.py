@@ -16,7 +16,7 @@ from flexbody.scenes import registry
 from flexbody.scenes.scene import Scene
 from flexbody.scenes.toml_scene import MAX_STEPS, SceneError, density_parameters, load_toml_scene
 
-__all__ = ["SceneError", "SceneSource", "open_scene", "scene_kind"]
+__all__ = ["SceneError", "SceneSource", "load_scene", "open_scene", "scene_kind"]
 
 
 @dataclass
@@ -133,3 +133,39 @@ def open_scene(name: str) -> SceneSource:
         return _function_source(name, kind, _python_builder(name))
     density = density_parameters(name)  # also reports a missing or malformed file now
     return SceneSource(name, kind, lambda overrides: load_toml_scene(name, overrides), None, density)
+
+
+def load_scene(scene: str | os.PathLike, **overrides: Any) -> Scene:
+    """Build a scene: a built-in one by name, or a ``.toml`` or ``.py`` scene file, with parameter overrides.
+
+    Parameters
+    ----------
+    scene : str or os.PathLike
+        A built-in scene name (``flexbody list`` lists them, e.g. "cantilever_end_moment", "hemisphere",
+        "spinning_plate") or the path of a scene file (docs/scenes.md).
+    **overrides
+        Parameters to change, as ``flexbody run SCENE --set KEY=VALUE`` changes them (e.g. ``nx=8``,
+        ``thickness=0.02``; dotted keys of a TOML file as ``**{"mesh.nx": 8}``).
+
+    Returns
+    -------
+    Scene
+        The model, its analysis, the tracked outputs and the reference; run it with
+        :func:`flexbody.scenes.scene.run_scene`.
+
+    Raises
+    ------
+    SceneError
+        An unknown scene or parameter, or a bad value: one line naming it.
+
+    Examples
+    --------
+    >>> import flexbody as fb
+    >>> scene = fb.load_scene("cantilever_end_shear", nx=4, steps=2)
+    >>> scene.kind, scene.model.n_dof
+    ('static', 120)
+    """
+    name = os.fspath(scene) if isinstance(scene, (str, os.PathLike)) else scene
+    if not isinstance(name, str):
+        raise SceneError(f"scene must be a built-in scene name or a scene file path, got {scene!r}")
+    return open_scene(name).build(overrides)

@@ -186,22 +186,8 @@ def _set_names(t: Table, what: str) -> list[str]:
     return names
 
 
-def _edges(t: Table, mesh) -> np.ndarray:
-    """The edges of ``set``: their union, each edge once even where the sets overlap."""
-    names = _set_names(t, "an edge set name or a list of them")
-    edges = np.vstack([call_checked(t.where, t.key("set"), mesh.edge_set, n) for n in names])
-    _, first = np.unique(np.sort(edges[:, [0, 2]], axis=1), axis=0, return_index=True)
-    return edges[np.sort(first)]
-
-
-def _nodal_loads(vectors: np.ndarray, key: str) -> list:
-    from flexbody.loads import NodalLoad
-    nodes = np.flatnonzero(np.any(vectors != 0, axis=1))
-    return [NodalLoad([i], **{key: vectors[i]}) for i in nodes]
-
-
 def _build_loads(tables: list[Table], mesh) -> list:
-    from flexbody.loads import FollowerPressure, NodalLoad, nodal_vectors_from_area, nodal_vectors_from_edges
+    from flexbody.loads import NodalLoad, edge_force, edge_moment, pressure, surface_force
     kinds = ("nodal", "edge_force", "edge_moment", "surface_force", "pressure")
     out = []
     for t in tables:
@@ -213,15 +199,15 @@ def _build_loads(tables: list[Table], mesh) -> list:
             out.append(call_checked(t.where, t.path, NodalLoad, nodes, force, moment, follower))
             t.done(["type", *SELECTORS, "force", "moment", "follower"])
         elif kind in ("edge_force", "edge_moment"):
-            edges, density = _edges(t, mesh), t.vector("density")
-            vectors = nodal_vectors_from_edges(mesh.nodes, edges, density, mesh.n_nodes)
-            out += _nodal_loads(vectors, "force" if kind == "edge_force" else "moment")
+            names, density = _set_names(t, "an edge set name or a list of them"), t.vector("density")
+            build = edge_force if kind == "edge_force" else edge_moment
+            out += call_checked(t.where, t.key("set"), build, mesh, names, density)
             t.done(["type", "set", "density"])
         elif kind == "surface_force":
-            out += _nodal_loads(nodal_vectors_from_area(mesh, t.vector("density")), "force")
+            out += surface_force(mesh, t.vector("density"))
             t.done(["type", "density"])
         else:
-            out.append(FollowerPressure(t.number("value"), _pressure_elements(t, mesh)))
+            out.append(pressure(mesh, t.number("value"), _pressure_elements(t, mesh)))
             t.done(["type", "value", "set"])
     return out
 

@@ -46,6 +46,7 @@ class ShellMaterial:
 
     @property
     def shear_modulus(self) -> float:
+        """G = E / (2 (1 + nu))."""
         return self.young / (2.0 * (1.0 + self.poisson))
 
     def plane_stress(self) -> np.ndarray:
