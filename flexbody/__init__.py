@@ -15,7 +15,8 @@ Groups of names (each documented with its object):
 
 - meshes: :class:`Tri6Mesh`, the generators (:func:`strip`, :func:`annulus`, :func:`slit_annulus`,
   :func:`cylinder`, :func:`spherical_cap`, :func:`regular_polygon`), :func:`read_mesh`, :func:`write_mesh`;
-- the shell: :class:`ShellMaterial`, :class:`ShellBody` (its element variant chosen by ``tying``),
+- the shell: :class:`ShellMaterial`, :class:`ShellBody` (``element=`` one of the variants :class:`MITC6`,
+  :class:`MITC7`, :class:`NoTying`; :func:`variant_from_key` maps the scene files' ``tying`` keys),
   :class:`ShellState`;
 - supports: :func:`clamp`, :func:`fix` (on set names or node indices), :class:`Fix`, :class:`Symmetry`,
   :class:`FixDirection`;
@@ -56,6 +57,8 @@ _PUBLIC: dict[str, str] = {
     "read_mesh": "flexbody.mesh.io", "write_mesh": "flexbody.mesh.io",
     # the shell
     "ShellMaterial": "flexbody.shell.material", "ShellBody": "flexbody.body", "ShellState": "flexbody.body",
+    "MITC6": "flexbody.shell.variants", "MITC7": "flexbody.shell.variants", "NoTying": "flexbody.shell.variants",
+    "ElementVariant": "flexbody.shell.variants", "variant_from_key": "flexbody.shell.variants",
     # supports
     "clamp": "flexbody.constraints", "fix": "flexbody.constraints", "nodes_of": "flexbody.constraints",
     "Fix": "flexbody.constraints", "Symmetry": "flexbody.constraints", "FixDirection": "flexbody.constraints",

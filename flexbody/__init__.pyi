@@ -20,6 +20,8 @@ from flexbody.scenes.scene import Scene as Scene
 from flexbody.scenes.sources import SceneError as SceneError, load_scene as load_scene
 from flexbody.shell.inertia import PointMass as PointMass
 from flexbody.shell.material import ShellMaterial as ShellMaterial
+from flexbody.shell.variants import (MITC6 as MITC6, MITC7 as MITC7, ElementVariant as ElementVariant,
+                                     NoTying as NoTying, variant_from_key as variant_from_key)
 from flexbody.solve import (DynamicSolution as DynamicSolution, StaticSolution as StaticSolution,
                             solve_dynamic as solve_dynamic, solve_static as solve_static)
 from flexbody.time_functions import Ramp as Ramp

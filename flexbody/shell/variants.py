@@ -99,35 +99,63 @@ class ElementVariant(Protocol):
     condenses_bubble: bool
 
     @property
-    def maps(self) -> np.ndarray: ...
+    def maps(self) -> np.ndarray:
+        """The assumed-strain map A (7, 8, 17, 8): Gauss-point strains from the evaluation points' (read-only)."""
+        ...
 
-    def element_state(self, n_elements: int) -> np.ndarray | None: ...
+    def element_state(self, n_elements: int) -> np.ndarray | None:
+        """The element unknowns a body keeps between evaluations (m, ...), or None when there are none."""
+        ...
 
-    def forces(self, batch: ElementBatch, want_tangent: bool = True) -> tuple[np.ndarray, np.ndarray | None]: ...
+    def forces(self, batch: ElementBatch, want_tangent: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+        """Internal forces (m, 36) and, if asked, tangents (m, 36, 36) of a batch of elements (eq. numbers in
+        :mod:`flexbody.shell.element`)."""
+        ...
 
-    def mixed_forces(self, batch: ElementBatch, stress: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+    def mixed_forces(self, batch: ElementBatch, stress: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Forces, tangents and the Gauss-point stress terms of the mixed Newton iteration at the given
+        independent stresses (m, 7, 8)."""
+        ...
 
-    def stress_forces(self, batch: ElementBatch, stress: np.ndarray) -> np.ndarray: ...
+    def stress_forces(self, batch: ElementBatch, stress: np.ndarray) -> np.ndarray:
+        """Internal forces (m, 36) of given Gauss-point stress resultants (m, 7, 8) at the batch's state."""
+        ...
 
-    def linearized_strains(self, batch: ElementBatch, dh: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+    def linearized_strains(self, batch: ElementBatch, dh: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Gauss-point strains (m, 7, 8) and their linearization along the local nodal motions dh (m, 36)."""
+        ...
 
-    def strains(self, batch: ElementBatch) -> np.ndarray: ...
+    def strains(self, batch: ElementBatch) -> np.ndarray:
+        """Cartesian Gauss-point strains (m, 7, 8) of the batch at its state."""
+        ...
 
-    def strain_energy(self, batch: ElementBatch, strain_kernel: str = "reference") -> float: ...
+    def strain_energy(self, batch: ElementBatch, strain_kernel: str = "reference") -> float:
+        """Strain energy of the batch, with the readable (``"reference"``) or the numba (``"numba"``) strains."""
+        ...
 
-    def warm_up(self, batch: ElementBatch) -> None: ...
+    def warm_up(self, batch: ElementBatch) -> None:
+        """Compile (or load from the cache) the kernels this variant uses, on a small batch."""
+        ...
 
     def element_force_tangent(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
-                              section: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+                              section: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Force (36) and tangent (36, 36) of one element with the readable numpy kernel."""
+        ...
 
     def element_strains(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
-                        bubble: np.ndarray | None = None) -> np.ndarray: ...
+                        bubble: np.ndarray | None = None) -> np.ndarray:
+        """Gauss-point strains (7, 8) of one element with the readable numpy kernel."""
+        ...
 
     def element_linearized_strains(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
-                                   dh: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+                                   dh: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Strains (7, 8) of one element and their linearization along dh (36), readable kernel."""
+        ...
 
     def element_strain_energy(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
-                              section: np.ndarray) -> float: ...
+                              section: np.ndarray) -> float:
+        """Strain energy of one element with the readable numpy kernel."""
+        ...
 
 
 def _read_only(A: np.ndarray) -> np.ndarray:
@@ -156,6 +184,7 @@ class _AssumedStrains:
         return compress_maps(self.maps)
 
     def element_state(self, n_elements: int) -> None:
+        """The element unknowns a body keeps between evaluations (m, ...), or None when there are none."""
         return None
 
     # -- batches ------------------------------------------------------------------------------------------
@@ -264,10 +293,12 @@ class MITC6(_AssumedStrains):
 
     @property
     def name(self) -> str:
+        """The variant's name in reports (e.g. "MITC6", "MITC6 (point membrane tying)")."""
         return "MITC6" if self.membrane == DEFAULT_SCHEME else f"MITC6 ({self.membrane} membrane tying)"
 
     @property
     def key(self) -> bool | str:
+        """The value of the scene files' ``tying`` key that gives this variant (:func:`variant_from_key`)."""
         return True if self.membrane == DEFAULT_SCHEME else self.membrane
 
     @cached_property
@@ -348,12 +379,16 @@ class MITC7:
         return f, K
 
     def mixed_forces(self, batch: ElementBatch, stress: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Forces, tangents and the Gauss-point stress terms of the mixed Newton iteration at the given
+        independent stresses (m, 7, 8)."""
         raise self._unavailable("the mixed Newton iteration")
 
     def stress_forces(self, batch: ElementBatch, stress: np.ndarray) -> np.ndarray:
+        """Internal forces (m, 36) of given Gauss-point stress resultants (m, 7, 8) at the batch's state."""
         raise self._unavailable("forces of given stresses")
 
     def linearized_strains(self, batch: ElementBatch, dh: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Gauss-point strains (m, 7, 8) and their linearization along the local nodal motions dh (m, 36)."""
         raise self._unavailable("linearized stresses")
 
     def strains(self, batch: ElementBatch) -> np.ndarray:
@@ -389,6 +424,7 @@ class MITC7:
 
     def element_linearized_strains(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
                                    dh: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Strains (7, 8) of one element and their linearization along dh (36), readable kernel."""
         raise self._unavailable("linearized stresses")
 
     def element_strain_energy(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
