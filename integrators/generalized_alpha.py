@@ -106,6 +106,8 @@ import scipy.sparse as sp
 
 from integrators.linear import LinearSolver, SingularMatrixError
 from integrators.newton import NewtonStats
+from integrators.protocols import (Damped, DynamicProblem, MassMatrix, Prescribed, TransferAlongMotion,
+                                   WrapsStaticProblem, require)
 
 
 @dataclass(frozen=True)
@@ -279,16 +281,19 @@ def _predict(q_n, v_n, vdot_n, a_n, h: float, p: AlphaParameters, update: Callab
 def _configuration(dyn, q_n, x: np.ndarray, t: float):
     """q_{n+1} = q_n o exp(x) on the free DoFs, the prescribed nodes at their place at t_{n+1}."""
     q = dyn.update(q_n, x)
-    return dyn.prescribe(q, t) if hasattr(dyn, "prescribe") else q
+    return dyn.prescribe(q, t) if isinstance(dyn, Prescribed) else q
 
 
 class GeneralizedAlpha:
     """The integrator with its iteration matrix, factorization and counters (reused across steps).
 
-    ``dyn`` supplies ``mass_matrix()`` (sparse, n x n; or a diagonal ``mass`` (n,)), ``residual(q, v, vdot, t)``,
-    ``residual_and_tangent(q, v, vdot, t)``, ``update(q, dq)``, ``dof_scale``, optionally ``damping_matrix(q)``
-    and ``damping_force(q, v)``, and, for the outputs, ``kinetic_energy``, ``strain_energy``,
-    ``gravity_potential``, ``momenta`` (see :class:`flexbody.dynamics.DynamicModel`).
+    ``dyn`` is a :class:`integrators.protocols.DynamicProblem` (``residual(q, v, vdot, t)``,
+    ``residual_and_tangent(q, v, vdot, t)``, ``update(q, dq)``, ``dof_scale``, ``n_dof``,
+    ``initial_acceleration``, and, for the records, ``kinetic_energy``, ``strain_energy``, ``gravity_potential``,
+    ``momenta``) with a mass (``mass_matrix()``, sparse n x n, or a diagonal ``mass`` (n,)); opt-in: damping
+    (:class:`~integrators.protocols.Damped`), prescribed motion (:class:`~integrators.protocols.Prescribed`) and
+    the transfer of the factorization along the motion (:class:`~integrators.protocols.TransferAlongMotion`);
+    see :class:`flexbody.dynamics.DynamicModel`.
     """
 
     def __init__(self, dyn, h: float, settings: AlphaSettings | None = None,
@@ -308,7 +313,7 @@ class GeneralizedAlpha:
         self.stats.tangent_updates += 1
         self.stats.residual_evaluations += 1
         S = K + _mass_matrix(self.dyn) * self.params.beta_prime(self.h)
-        C = self.dyn.damping_matrix(step.state) if hasattr(self.dyn, "damping_matrix") else None
+        C = self.dyn.damping_matrix(step.state) if isinstance(self.dyn, Damped) else None
         if C is not None:
             S = S + self.params.gamma_prime(self.h) * C
         self.solver.factorize(S.tocsc())
@@ -327,7 +332,7 @@ class GeneralizedAlpha:
         was the Kabsch fit of ``dyn.transfer`` at every iteration).
         """
         dyn = self.dyn
-        if not (self.settings.rotate_matrix and hasattr(dyn, "transfer")):
+        if not (self.settings.rotate_matrix and isinstance(dyn, TransferAlongMotion)):
             return -self.solver.solve(r)
         if self._transfer is None or self._transfer[0] is not self._factorized_at:
             self._transfer = (self._factorized_at, dyn.transfer(self._factorized_at, state))
@@ -424,13 +429,14 @@ def _record(dyn, index: int, t: float, state, v: np.ndarray, iterations: int, re
 
 
 def _damping_force(dyn, state, v: np.ndarray) -> np.ndarray:
-    """f_d(q, v) (0 for a model without ``damping_force``)."""
-    return dyn.damping_force(state, v) if hasattr(dyn, "damping_force") else np.zeros_like(v)
+    """f_d(q, v) (0 for a model without damping, :class:`~integrators.protocols.Damped`)."""
+    return dyn.damping_force(state, v) if isinstance(dyn, Damped) else np.zeros_like(v)
 
 
 def _mass_matrix(dyn) -> sp.spmatrix:
-    """The constant mass matrix M: ``dyn.mass_matrix()`` (sparse: lumped or consistent), or diag(``dyn.mass``)."""
-    return dyn.mass_matrix() if hasattr(dyn, "mass_matrix") else sp.diags(dyn.mass)
+    """The constant mass matrix M: ``dyn.mass_matrix()`` (sparse: lumped or consistent,
+    :class:`~integrators.protocols.MassMatrix`), or diag(``dyn.mass``) (:class:`~integrators.protocols.LumpedMass`)."""
+    return dyn.mass_matrix() if isinstance(dyn, MassMatrix) else sp.diags(dyn.mass)
 
 
 class _StepFailure(RuntimeError):
@@ -625,10 +631,13 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
 
     Parameters
     ----------
-    dyn : the dynamic model (:class:`flexbody.dynamics.DynamicModel`)
+    dyn : the dynamic problem (:class:`integrators.protocols.DynamicProblem`, e.g.
+        :class:`flexbody.dynamics.DynamicModel`); a model lacking a required member is refused with a one-line
+        ``TypeError`` naming it
     h : the time step; adaptive: the base step H, the first step and the output interval's unit (rounded
         down as the fixed step is)
-    state, velocity : initial configuration (default: the reference) and free-DoF velocity (default: 0)
+    state, velocity : initial configuration (default: the reference ``dyn.model.initial_state()``,
+        :class:`~integrators.protocols.WrapsStaticProblem`) and free-DoF velocity (default: 0)
     on_step : called as on_step(record, state, v) after every recorded step, and for the last converged
         step when a ``KeyboardInterrupt`` stops the run between two recorded steps (then re-raised)
     record_every : keep every k-th step record (energy and momenta are evaluated only for kept steps);
@@ -654,8 +663,11 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
     settings = settings or AlphaSettings()
     n_steps = max(1, int(np.ceil((t_end - t_start) / h - 1e-9)))
     h = (t_end - t_start) / n_steps
+    require(dyn, DynamicProblem, "the dynamic problem")
+    if state is None and not isinstance(dyn, WrapsStaticProblem):
+        raise ValueError(f"the dynamic problem {type(dyn).__name__} has no static model to start from: give state")
     q = dyn.model.initial_state() if state is None else state
-    if hasattr(dyn, "prescribe"):
+    if isinstance(dyn, Prescribed):
         q = dyn.prescribe(q, t_start)
     v = np.zeros(dyn.n_dof) if velocity is None else np.asarray(velocity, float).copy()
     vdot = dyn.initial_acceleration(q, t_start, v) if acceleration is None else np.asarray(acceleration, float).copy()
