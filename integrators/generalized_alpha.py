@@ -263,6 +263,34 @@ class _Step:
     a: np.ndarray
 
 
+@dataclass(frozen=True)
+class StepTaken:
+    """A step of h taken by :meth:`_Stepper.advance`: the end values on the free DoFs and the Newton work spent.
+
+    After cut-backs (two steps of h/2, recursively) the sub-steps' work is summed (:meth:`then`): the histories
+    concatenated, ``substeps`` the sub-steps taken, ``failures`` the failed tries, ``h`` the last sub-step's size.
+    """
+
+    state: object
+    v: np.ndarray                     # v_{n+1} (n,)
+    vdot: np.ndarray                  # vdot_{n+1} (n,)
+    a: np.ndarray                     # a_{n+1} (n,), the pseudo-acceleration
+    iterations: int
+    residuals: list[float]            # ||r|| at each iterate
+    corrections: list[float]          # weighted RMS norm of each correction
+    refreshes: int                    # iteration-matrix refreshes
+    substeps: int = 1
+    failures: int = 0
+    h: float = 0.0                    # the size of the last sub-step (s)
+
+    def then(self, second: "StepTaken") -> "StepTaken":
+        """The two halves of a failed step: this one, then ``second`` from its end (the failed try counted)."""
+        return StepTaken(second.state, second.v, second.vdot, second.a, self.iterations + second.iterations,
+                         self.residuals + second.residuals, self.corrections + second.corrections,
+                         self.refreshes + second.refreshes, self.substeps + second.substeps,
+                         self.failures + second.failures + 1, second.h)
+
+
 def weighted_rms(dx: np.ndarray, x: np.ndarray, scale, settings: AlphaSettings) -> float:
     """sqrt(mean((dx_i / (atol s_i + rtol |x_i|))^2))."""
     w = settings.atol * scale + settings.rtol * np.abs(x)
@@ -443,6 +471,46 @@ class _StepFailure(RuntimeError):
     pass
 
 
+class _Bookkeeping:
+    """What the fixed-step and the adaptive loops share: the dissipated work D (module docstring), the records
+    kept and given to ``on_step``, and the hand-over of the last converged step when a ``KeyboardInterrupt``
+    stops the run between two records. Step indices count from the run's start (``first_step`` included)."""
+
+    def __init__(self, dyn, on_step: Callable | None, t0: float, q, v: np.ndarray, dissipated: float,
+                 first_step: int) -> None:
+        self.dyn, self.on_step, self.t0 = dyn, on_step, t0
+        self.records: list[DynamicStepRecord] = []
+        self.dissipated = dissipated                 # D = int v . f_d dt
+        self._f_damp = _damping_force(dyn, q, v)     # f_d at the last converged step
+        self.last = first_step                       # the last step given to on_step
+
+    def accept(self, h: float, v_old: np.ndarray, q, v: np.ndarray) -> None:
+        """A converged step of h from velocity ``v_old`` to (q, v): D += h v_m . f_m (the means of the step)."""
+        f_new = _damping_force(self.dyn, q, v)
+        self.dissipated += 0.25 * h * float((v_old + v) @ (self._f_damp + f_new))
+        self._f_damp = f_new
+
+    def record(self, index: int, t: float, q, v: np.ndarray, vdot: np.ndarray, a: np.ndarray, iterations: int,
+               residuals, corrections, refreshes: int, substeps: int, **fields) -> None:
+        """Keep the record of step ``index`` (``fields``: the record's further values) and give it to on_step."""
+        rec = _record(self.dyn, index, t, q, v, iterations, residuals, corrections, refreshes, substeps, self.t0,
+                      self.dissipated)
+        rec.motion = {"v": v, "vdot": vdot, "a": a}
+        for name, value in fields.items():
+            setattr(rec, name, value)
+        self.records.append(rec)
+        self.last = index
+        if self.on_step is not None:
+            self.on_step(rec, q, v)
+
+    def interrupted(self, index: int, t: float, q, v: np.ndarray, vdot: np.ndarray, a: np.ndarray) -> None:
+        """Ctrl-C / a stop request: give on_step the last converged step (``index``) if it was not recorded."""
+        if self.on_step is not None and index > self.last:
+            rec = _record(self.dyn, index, t, q, v, 0, [], [], 0, 1, self.t0, self.dissipated)
+            rec.motion = {"v": v, "vdot": vdot, "a": a}
+            self.on_step(rec, q, v)
+
+
 class _Stepper:
     """Steps of h, or after a failure two steps of h/2 (recursively, ``max_cutbacks`` levels).
 
@@ -461,20 +529,17 @@ class _Stepper:
             self._levels[level] = GeneralizedAlpha(self.dyn, self.h / 2**level, self.settings, self.stats)
         return self._levels[level]
 
-    def advance(self, q, v, vdot, a, t: float, level: int = 0):
-        """(q, v, vdot, a, iterations, residuals, corrections, refreshes, substeps, failures, h of the last
-        sub-step) after a step of h / 2^level."""
+    def advance(self, q, v, vdot, a, t: float, level: int = 0) -> StepTaken:
+        """A step of h / 2^level from t, cut back into two halves (recursively) when it fails."""
         try:
             st, its, res, cor, ref = self._integrator(level).step(q, v, vdot, a, t)
-            return st.state, st.v, st.vdot, st.a, its, res, cor, ref, 1, 0, self.h / 2**level
+            return StepTaken(st.state, st.v, st.vdot, st.a, its, res, cor, ref, 1, 0, self.h / 2**level)
         except _StepFailure:
             if level >= self.settings.max_cutbacks:
                 raise
         half = self.h / 2 ** (level + 1)
         first = self.advance(q, v, vdot, a, t, level + 1)
-        second = self.advance(*first[:4], t + half, level + 1)
-        return (*second[:4], first[4] + second[4], first[5] + second[5], first[6] + second[6],
-                first[7] + second[7], first[8] + second[8], first[9] + second[9] + 1, second[10])
+        return first.then(self.advance(first.state, first.v, first.vdot, first.a, t + half, level + 1))
 
 
 # -- error-controlled time steps ------------------------------------------------------------------------------
@@ -553,17 +618,16 @@ def _adaptive_run(dyn, stepper: _AdaptiveStepper, t_start: float, t_end: float, 
     """The loop of :func:`generalized_alpha` with error-controlled steps (module docstring); ``first_step``
     and ``dissipated``: the step count and the dissipated work D at t_start (a restart)."""
     s, p = stepper.settings, stepper.params
-    f_damp = _damping_force(dyn, q, v)
-    records: list[DynamicStepRecord] = []
+    book = _Bookkeeping(dyn, on_step, t0, q, v, dissipated, first_step)
     pos, accepted, rej_err, rej_newton = 0, 0, 0, 0     # totals
     since = [0, 0, 0]                                    # accepted, rejected (error, Newton) since the last record
     wanted, grow = stepper.h(max(stepper.j_min, 0)), True
     a_prev, h_prev, h_taken = None, 0.0, []
-    t, last = t_start, 0
+    t = t_start
 
     def result(converged: bool, message: str) -> DynamicResult:
-        return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, converged, message,
-                             time.perf_counter() - t0, dissipated, accepted, rej_err, rej_newton,
+        return DynamicResult(q, v, vdot, a, t, book.records, stepper.stats, initial, converged, message,
+                             time.perf_counter() - t0, book.dissipated, accepted, rej_err, rej_newton,
                              min(h_taken, default=float("nan")), max(h_taken, default=float("nan")), True)
 
     try:
@@ -601,27 +665,18 @@ def _adaptive_run(dyn, stepper: _AdaptiveStepper, t_start: float, t_end: float, 
             since[0] += 1
             wanted = h * min(2.0 if grow else 1.0, factor)
             grow = True
-            f_new = _damping_force(dyn, q, v)
-            dissipated += 0.25 * h * float((v_old + v) @ (f_damp + f_new))
-            f_damp = f_new
+            book.accept(h, v_old, q, v)
             if pos % stepper.out == 0 or pos == stepper.end:
-                rec = _record(dyn, first_step + accepted, t, q, v, its, res, cor, ref, since[0], t0, dissipated)
-                rec.motion = {"v": v, "vdot": vdot, "a": a}
-                rec.h, rec.rejected_error, rec.rejected_newton, rec.error_estimate = h, since[1], since[2], err
-                records.append(rec)
-                since, last = [0, 0, 0], accepted
-                if on_step is not None:
-                    on_step(rec, q, v)
-    except KeyboardInterrupt:
-        if on_step is not None and accepted > last:
-            rec = _record(dyn, first_step + accepted, t, q, v, 0, [], [], 0, 1, t0, dissipated)
-            rec.motion = {"v": v, "vdot": vdot, "a": a}
-            on_step(rec, q, v)
+                counts, since = since, [0, 0, 0]
+                book.record(first_step + accepted, t, q, v, vdot, a, its, res, cor, ref, counts[0], h=h,
+                            rejected_error=counts[1], rejected_newton=counts[2], error_estimate=err)
+    except KeyboardInterrupt:  # Ctrl-C / a stop request: hand the last converged step over, then stop
+        book.interrupted(first_step + accepted, t, q, v, vdot, a)
         raise
     return result(True, "completed")
 
 
-def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.ndarray | None = None,
+def generalized_alpha(dyn: DynamicProblem, t_end: float, h: float, *, state=None, velocity: np.ndarray | None = None,
                       settings: AlphaSettings | None = None, t_start: float = 0.0,
                       on_step: Callable | None = None, record_every: int = 1,
                       acceleration: np.ndarray | None = None, pseudo_acceleration: np.ndarray | None = None,
@@ -679,40 +734,32 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
         return _adaptive_run(dyn, stepper, t_start, t_end, q, v, vdot, a, on_step, t0, initial,
                              first_step, float(dissipated_energy))
     stepper = _Stepper(dyn, h, settings)
-    f_damp, dissipated = _damping_force(dyn, q, v), float(dissipated_energy)  # f_d, D = int v . f_d dt
-    records: list[DynamicStepRecord] = []
+    book = _Bookkeeping(dyn, on_step, t0, q, v, float(dissipated_energy), first_step)
     substeps, failures, failed_since = 0, 0, 0
-    t, done, last = t_start, 0, 0  # (q, v) after `done` steps at t; `last`: the last step given to on_step
+    t, done = t_start, 0  # (q, v) after `done` steps at t
 
     def result(converged: bool, message: str) -> DynamicResult:
-        return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, converged, message,
-                             time.perf_counter() - t0, dissipated, substeps, 0, failures,
+        return DynamicResult(q, v, vdot, a, t, book.records, stepper.stats, initial, converged, message,
+                             time.perf_counter() - t0, book.dissipated, substeps, 0, failures,
                              h / 2 ** max(stepper._levels, default=0), h, False)
 
     try:
         for n in range(n_steps):
             try:
                 v_old = v
-                q, v, vdot, a, its, res, cor, ref, sub, fails, h_last = stepper.advance(q, v, vdot, a, t)
+                step = stepper.advance(q, v, vdot, a, t)
             except _StepFailure as exc:
                 return result(False, f"step {n + 1} from t = {t:.6g} failed: {exc}")
+            q, v, vdot, a = step.state, step.v, step.vdot, step.a
             t, done = t_start + (n + 1) * h, n + 1  # no call since advance(): an interrupt cannot fall between
-            substeps, failures, failed_since = substeps + sub, failures + fails, failed_since + fails
-            f_new = _damping_force(dyn, q, v)
-            dissipated += 0.25 * h * float((v_old + v) @ (f_damp + f_new))
-            f_damp = f_new
+            substeps, failures = substeps + step.substeps, failures + step.failures
+            failed_since += step.failures
+            book.accept(h, v_old, q, v)
             if (first_step + n + 1) % record_every == 0 or n + 1 == n_steps:
-                rec = _record(dyn, first_step + n + 1, t, q, v, its, res, cor, ref, sub, t0, dissipated)
-                rec.motion = {"v": v, "vdot": vdot, "a": a}
-                rec.h, rec.rejected_newton, failed_since = h_last, failed_since, 0
-                records.append(rec)
-                last = n + 1
-                if on_step is not None:
-                    on_step(rec, q, v)
+                failed, failed_since = failed_since, 0
+                book.record(first_step + n + 1, t, q, v, vdot, a, step.iterations, step.residuals, step.corrections,
+                            step.refreshes, step.substeps, h=step.h, rejected_newton=failed)
     except KeyboardInterrupt:  # Ctrl-C / a stop request: hand the last converged step over, then stop
-        if on_step is not None and done > last:
-            rec = _record(dyn, first_step + done, t, q, v, 0, [], [], 0, 1, t0, dissipated)
-            rec.motion = {"v": v, "vdot": vdot, "a": a}
-            on_step(rec, q, v)
+        book.interrupted(first_step + done, t, q, v, vdot, a)
         raise
     return result(True, "completed")

@@ -11,7 +11,7 @@ from flexbody.dynamics import DynamicModel, RayleighDamping
 from flexbody.shell.material import ShellMaterial
 from flexbody.mesh import generators
 from flexbody.spinning import SpinningModel
-from integrators.generalized_alpha import generalized_alpha
+from integrators.generalized_alpha import StepTaken, generalized_alpha
 from integrators.protocols import (ConjugateMatrix, Damped, DynamicProblem, LumpedMass, MassMatrix,
                                    MixedIteration, Prescribed, StaticProblem, StressedState, SupportCheck,
                                    TransferAlongMotion, WrapsStaticProblem, members, missing, require)
@@ -122,3 +122,14 @@ def test_a_capability_is_used_only_when_complete():
     a = generalized_alpha(dyn, 1.0, 0.1, state=np.ones(1))
     b = generalized_alpha(half, 1.0, 0.1, state=np.ones(1))
     assert np.array_equal(a.state, b.state) and a.stats.iterations == b.stats.iterations
+
+
+def test_the_halves_of_a_cut_step_sum_their_work():
+    """StepTaken.then: the end values of the second half, the histories in order, the failed try counted."""
+    one, two = np.ones(1), 2 * np.ones(1)
+    first = StepTaken("q1", one, one, one, 3, [1.0, 0.1], [5.0], 1, 1, 0, 0.5)
+    second = StepTaken("q2", two, two, two, 2, [0.2], [4.0, 0.5], 0, 2, 1, 0.25)
+    both = first.then(second)
+    assert (both.state, both.v[0], both.vdot[0], both.a[0], both.h) == ("q2", 2.0, 2.0, 2.0, 0.25)
+    assert (both.iterations, both.refreshes, both.substeps, both.failures) == (5, 1, 3, 2)
+    assert both.residuals == [1.0, 0.1, 0.2] and both.corrections == [5.0, 4.0, 0.5]
