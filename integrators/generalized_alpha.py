@@ -106,6 +106,8 @@ import scipy.sparse as sp
 
 from integrators.linear import LinearSolver, SingularMatrixError
 from integrators.newton import NewtonStats
+from integrators.protocols import (Damped, DynamicProblem, MassMatrix, Prescribed, TransferAlongMotion,
+                                   WrapsStaticProblem, require)
 
 
 @dataclass(frozen=True)
@@ -265,6 +267,34 @@ class _Step:
     a: np.ndarray
 
 
+@dataclass(frozen=True)
+class StepTaken:
+    """A step of h taken by :meth:`_Stepper.advance`: the end values on the free DoFs and the Newton work spent.
+
+    After cut-backs (two steps of h/2, recursively) the sub-steps' work is summed (:meth:`then`): the histories
+    concatenated, ``substeps`` the sub-steps taken, ``failures`` the failed tries, ``h`` the last sub-step's size.
+    """
+
+    state: object
+    v: np.ndarray                     # v_{n+1} (n,)
+    vdot: np.ndarray                  # vdot_{n+1} (n,)
+    a: np.ndarray                     # a_{n+1} (n,), the pseudo-acceleration
+    iterations: int
+    residuals: list[float]            # ||r|| at each iterate
+    corrections: list[float]          # weighted RMS norm of each correction
+    refreshes: int                    # iteration-matrix refreshes
+    substeps: int = 1
+    failures: int = 0
+    h: float = 0.0                    # the size of the last sub-step (s)
+
+    def then(self, second: "StepTaken") -> "StepTaken":
+        """The two halves of a failed step: this one, then ``second`` from its end (the failed try counted)."""
+        return StepTaken(second.state, second.v, second.vdot, second.a, self.iterations + second.iterations,
+                         self.residuals + second.residuals, self.corrections + second.corrections,
+                         self.refreshes + second.refreshes, self.substeps + second.substeps,
+                         self.failures + second.failures + 1, second.h)
+
+
 def weighted_rms(dx: np.ndarray, x: np.ndarray, scale, settings: AlphaSettings) -> float:
     """sqrt(mean((dx_i / (atol s_i + rtol |x_i|))^2))."""
     w = settings.atol * scale + settings.rtol * np.abs(x)
@@ -283,16 +313,19 @@ def _predict(q_n, v_n, vdot_n, a_n, h: float, p: AlphaParameters, update: Callab
 def _configuration(dyn, q_n, x: np.ndarray, t: float):
     """q_{n+1} = q_n o exp(x) on the free DoFs, the prescribed nodes at their place at t_{n+1}."""
     q = dyn.update(q_n, x)
-    return dyn.prescribe(q, t) if hasattr(dyn, "prescribe") else q
+    return dyn.prescribe(q, t) if isinstance(dyn, Prescribed) else q
 
 
 class GeneralizedAlpha:
     """The integrator with its iteration matrix, factorization and counters (reused across steps).
 
-    ``dyn`` supplies ``mass_matrix()`` (sparse, n x n; or a diagonal ``mass`` (n,)), ``residual(q, v, vdot, t)``,
-    ``residual_and_tangent(q, v, vdot, t)``, ``update(q, dq)``, ``dof_scale``, optionally ``damping_matrix(q)``
-    and ``damping_force(q, v)``, and, for the outputs, ``kinetic_energy``, ``strain_energy``,
-    ``gravity_potential``, ``momenta`` (see :class:`flexbody.dynamics.DynamicModel`).
+    ``dyn`` is a :class:`integrators.protocols.DynamicProblem` (``residual(q, v, vdot, t)``,
+    ``residual_and_tangent(q, v, vdot, t)``, ``update(q, dq)``, ``dof_scale``, ``n_dof``,
+    ``initial_acceleration``, and, for the records, ``kinetic_energy``, ``strain_energy``, ``gravity_potential``,
+    ``momenta``) with a mass (``mass_matrix()``, sparse n x n, or a diagonal ``mass`` (n,)); opt-in: damping
+    (:class:`~integrators.protocols.Damped`), prescribed motion (:class:`~integrators.protocols.Prescribed`) and
+    the transfer of the factorization along the motion (:class:`~integrators.protocols.TransferAlongMotion`);
+    see :class:`flexbody.dynamics.DynamicModel`.
     """
 
     def __init__(self, dyn, h: float, settings: AlphaSettings | None = None,
@@ -312,7 +345,7 @@ class GeneralizedAlpha:
         self.stats.tangent_updates += 1
         self.stats.residual_evaluations += 1
         S = K + _mass_matrix(self.dyn) * self.params.beta_prime(self.h)
-        C = self.dyn.damping_matrix(step.state) if hasattr(self.dyn, "damping_matrix") else None
+        C = self.dyn.damping_matrix(step.state) if isinstance(self.dyn, Damped) else None
         if C is not None:
             S = S + self.params.gamma_prime(self.h) * C
         self.solver.factorize(S.tocsc())
@@ -331,7 +364,7 @@ class GeneralizedAlpha:
         was the Kabsch fit of ``dyn.transfer`` at every iteration).
         """
         dyn = self.dyn
-        if not (self.settings.rotate_matrix and hasattr(dyn, "transfer")):
+        if not (self.settings.rotate_matrix and isinstance(dyn, TransferAlongMotion)):
             return -self.solver.solve(r)
         if self._transfer is None or self._transfer[0] is not self._factorized_at:
             self._transfer = (self._factorized_at, dyn.transfer(self._factorized_at, state))
@@ -428,17 +461,58 @@ def _record(dyn, index: int, t: float, state, v: np.ndarray, iterations: int, re
 
 
 def _damping_force(dyn, state, v: np.ndarray) -> np.ndarray:
-    """f_d(q, v) (0 for a model without ``damping_force``)."""
-    return dyn.damping_force(state, v) if hasattr(dyn, "damping_force") else np.zeros_like(v)
+    """f_d(q, v) (0 for a model without damping, :class:`~integrators.protocols.Damped`)."""
+    return dyn.damping_force(state, v) if isinstance(dyn, Damped) else np.zeros_like(v)
 
 
 def _mass_matrix(dyn) -> sp.spmatrix:
-    """The constant mass matrix M: ``dyn.mass_matrix()`` (sparse: lumped or consistent), or diag(``dyn.mass``)."""
-    return dyn.mass_matrix() if hasattr(dyn, "mass_matrix") else sp.diags(dyn.mass)
+    """The constant mass matrix M: ``dyn.mass_matrix()`` (sparse: lumped or consistent,
+    :class:`~integrators.protocols.MassMatrix`), or diag(``dyn.mass``) (:class:`~integrators.protocols.LumpedMass`)."""
+    return dyn.mass_matrix() if isinstance(dyn, MassMatrix) else sp.diags(dyn.mass)
 
 
 class _StepFailure(RuntimeError):
     pass
+
+
+class _Bookkeeping:
+    """What the fixed-step and the adaptive loops share: the dissipated work D (module docstring), the records
+    kept and given to ``on_step``, and the hand-over of the last converged step when a ``KeyboardInterrupt``
+    stops the run between two records. Step indices count from the run's start (``first_step`` included)."""
+
+    def __init__(self, dyn, on_step: Callable | None, t0: float, q, v: np.ndarray, dissipated: float,
+                 first_step: int) -> None:
+        self.dyn, self.on_step, self.t0 = dyn, on_step, t0
+        self.records: list[DynamicStepRecord] = []
+        self.dissipated = dissipated                 # D = int v . f_d dt
+        self._f_damp = _damping_force(dyn, q, v)     # f_d at the last converged step
+        self.last = first_step                       # the last step given to on_step
+
+    def accept(self, h: float, v_old: np.ndarray, q, v: np.ndarray) -> None:
+        """A converged step of h from velocity ``v_old`` to (q, v): D += h v_m . f_m (the means of the step)."""
+        f_new = _damping_force(self.dyn, q, v)
+        self.dissipated += 0.25 * h * float((v_old + v) @ (self._f_damp + f_new))
+        self._f_damp = f_new
+
+    def record(self, index: int, t: float, q, v: np.ndarray, vdot: np.ndarray, a: np.ndarray, iterations: int,
+               residuals, corrections, refreshes: int, substeps: int, **fields) -> None:
+        """Keep the record of step ``index`` (``fields``: the record's further values) and give it to on_step."""
+        rec = _record(self.dyn, index, t, q, v, iterations, residuals, corrections, refreshes, substeps, self.t0,
+                      self.dissipated)
+        rec.motion = {"v": v, "vdot": vdot, "a": a}
+        for name, value in fields.items():
+            setattr(rec, name, value)
+        self.records.append(rec)
+        self.last = index
+        if self.on_step is not None:
+            self.on_step(rec, q, v)
+
+    def interrupted(self, index: int, t: float, q, v: np.ndarray, vdot: np.ndarray, a: np.ndarray) -> None:
+        """Ctrl-C / a stop request: give on_step the last converged step (``index``) if it was not recorded."""
+        if self.on_step is not None and index > self.last:
+            rec = _record(self.dyn, index, t, q, v, 0, [], [], 0, 1, self.t0, self.dissipated)
+            rec.motion = {"v": v, "vdot": vdot, "a": a}
+            self.on_step(rec, q, v)
 
 
 class _Stepper:
@@ -459,20 +533,17 @@ class _Stepper:
             self._levels[level] = GeneralizedAlpha(self.dyn, self.h / 2**level, self.settings, self.stats)
         return self._levels[level]
 
-    def advance(self, q, v, vdot, a, t: float, level: int = 0):
-        """(q, v, vdot, a, iterations, residuals, corrections, refreshes, substeps, failures, h of the last
-        sub-step) after a step of h / 2^level."""
+    def advance(self, q, v, vdot, a, t: float, level: int = 0) -> StepTaken:
+        """A step of h / 2^level from t, cut back into two halves (recursively) when it fails."""
         try:
             st, its, res, cor, ref = self._integrator(level).step(q, v, vdot, a, t)
-            return st.state, st.v, st.vdot, st.a, its, res, cor, ref, 1, 0, self.h / 2**level
+            return StepTaken(st.state, st.v, st.vdot, st.a, its, res, cor, ref, 1, 0, self.h / 2**level)
         except _StepFailure:
             if level >= self.settings.max_cutbacks:
                 raise
         half = self.h / 2 ** (level + 1)
         first = self.advance(q, v, vdot, a, t, level + 1)
-        second = self.advance(*first[:4], t + half, level + 1)
-        return (*second[:4], first[4] + second[4], first[5] + second[5], first[6] + second[6],
-                first[7] + second[7], first[8] + second[8], first[9] + second[9] + 1, second[10])
+        return first.then(self.advance(first.state, first.v, first.vdot, first.a, t + half, level + 1))
 
 
 # -- error-controlled time steps ------------------------------------------------------------------------------
@@ -551,17 +622,16 @@ def _adaptive_run(dyn, stepper: _AdaptiveStepper, t_start: float, t_end: float, 
     """The loop of :func:`generalized_alpha` with error-controlled steps (module docstring); ``first_step``
     and ``dissipated``: the step count and the dissipated work D at t_start (a restart)."""
     s, p = stepper.settings, stepper.params
-    f_damp = _damping_force(dyn, q, v)
-    records: list[DynamicStepRecord] = []
+    book = _Bookkeeping(dyn, on_step, t0, q, v, dissipated, first_step)
     pos, accepted, rej_err, rej_newton = 0, 0, 0, 0     # totals
     since = [0, 0, 0]                                    # accepted, rejected (error, Newton) since the last record
     wanted, grow = stepper.h(max(stepper.j_min, 0)), True
     a_prev, h_prev, h_taken = None, 0.0, []
-    t, last = t_start, 0
+    t = t_start
 
     def result(converged: bool, message: str) -> DynamicResult:
-        return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, converged, message,
-                             time.perf_counter() - t0, dissipated, accepted, rej_err, rej_newton,
+        return DynamicResult(q, v, vdot, a, t, book.records, stepper.stats, initial, converged, message,
+                             time.perf_counter() - t0, book.dissipated, accepted, rej_err, rej_newton,
                              min(h_taken, default=float("nan")), max(h_taken, default=float("nan")), True)
 
     try:
@@ -599,27 +669,18 @@ def _adaptive_run(dyn, stepper: _AdaptiveStepper, t_start: float, t_end: float, 
             since[0] += 1
             wanted = h * min(2.0 if grow else 1.0, factor)
             grow = True
-            f_new = _damping_force(dyn, q, v)
-            dissipated += 0.25 * h * float((v_old + v) @ (f_damp + f_new))
-            f_damp = f_new
+            book.accept(h, v_old, q, v)
             if pos % stepper.out == 0 or pos == stepper.end:
-                rec = _record(dyn, first_step + accepted, t, q, v, its, res, cor, ref, since[0], t0, dissipated)
-                rec.motion = {"v": v, "vdot": vdot, "a": a}
-                rec.h, rec.rejected_error, rec.rejected_newton, rec.error_estimate = h, since[1], since[2], err
-                records.append(rec)
-                since, last = [0, 0, 0], accepted
-                if on_step is not None:
-                    on_step(rec, q, v)
-    except KeyboardInterrupt:
-        if on_step is not None and accepted > last:
-            rec = _record(dyn, first_step + accepted, t, q, v, 0, [], [], 0, 1, t0, dissipated)
-            rec.motion = {"v": v, "vdot": vdot, "a": a}
-            on_step(rec, q, v)
+                counts, since = since, [0, 0, 0]
+                book.record(first_step + accepted, t, q, v, vdot, a, its, res, cor, ref, counts[0], h=h,
+                            rejected_error=counts[1], rejected_newton=counts[2], error_estimate=err)
+    except KeyboardInterrupt:  # Ctrl-C / a stop request: hand the last converged step over, then stop
+        book.interrupted(first_step + accepted, t, q, v, vdot, a)
         raise
     return result(True, "completed")
 
 
-def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.ndarray | None = None,
+def generalized_alpha(dyn: DynamicProblem, t_end: float, h: float, *, state=None, velocity: np.ndarray | None = None,
                       settings: AlphaSettings | None = None, t_start: float = 0.0,
                       on_step: Callable | None = None, record_every: int = 1,
                       acceleration: np.ndarray | None = None, pseudo_acceleration: np.ndarray | None = None,
@@ -629,10 +690,13 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
 
     Parameters
     ----------
-    dyn : the dynamic model (:class:`flexbody.dynamics.DynamicModel`)
+    dyn : the dynamic problem (:class:`integrators.protocols.DynamicProblem`, e.g.
+        :class:`flexbody.dynamics.DynamicModel`); a model lacking a required member is refused with a one-line
+        ``TypeError`` naming it
     h : the time step; adaptive: the base step H, the first step and the output interval's unit (rounded
         down as the fixed step is)
-    state, velocity : initial configuration (default: the reference) and free-DoF velocity (default: 0)
+    state, velocity : initial configuration (default: the reference ``dyn.model.initial_state()``,
+        :class:`~integrators.protocols.WrapsStaticProblem`) and free-DoF velocity (default: 0)
     on_step : called as on_step(record, state, v) after every recorded step, and for the last converged
         step when a ``KeyboardInterrupt`` stops the run between two recorded steps (then re-raised)
     record_every : keep every k-th step record (energy and momenta are evaluated only for kept steps);
@@ -658,8 +722,11 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
     settings = settings or AlphaSettings()
     n_steps = max(1, int(np.ceil((t_end - t_start) / h - 1e-9)))
     h = (t_end - t_start) / n_steps
+    require(dyn, DynamicProblem, "the dynamic problem")
+    if state is None and not isinstance(dyn, WrapsStaticProblem):
+        raise ValueError(f"the dynamic problem {type(dyn).__name__} has no static model to start from: give state")
     q = dyn.model.initial_state() if state is None else state
-    if hasattr(dyn, "prescribe"):
+    if isinstance(dyn, Prescribed):
         q = dyn.prescribe(q, t_start)
     v = np.zeros(dyn.n_dof) if velocity is None else np.asarray(velocity, float).copy()
     vdot = dyn.initial_acceleration(q, t_start, v) if acceleration is None else np.asarray(acceleration, float).copy()
@@ -671,40 +738,32 @@ def generalized_alpha(dyn, t_end: float, h: float, *, state=None, velocity: np.n
         return _adaptive_run(dyn, stepper, t_start, t_end, q, v, vdot, a, on_step, t0, initial,
                              first_step, float(dissipated_energy))
     stepper = _Stepper(dyn, h, settings)
-    f_damp, dissipated = _damping_force(dyn, q, v), float(dissipated_energy)  # f_d, D = int v . f_d dt
-    records: list[DynamicStepRecord] = []
+    book = _Bookkeeping(dyn, on_step, t0, q, v, float(dissipated_energy), first_step)
     substeps, failures, failed_since = 0, 0, 0
-    t, done, last = t_start, 0, 0  # (q, v) after `done` steps at t; `last`: the last step given to on_step
+    t, done = t_start, 0  # (q, v) after `done` steps at t
 
     def result(converged: bool, message: str) -> DynamicResult:
-        return DynamicResult(q, v, vdot, a, t, records, stepper.stats, initial, converged, message,
-                             time.perf_counter() - t0, dissipated, substeps, 0, failures,
+        return DynamicResult(q, v, vdot, a, t, book.records, stepper.stats, initial, converged, message,
+                             time.perf_counter() - t0, book.dissipated, substeps, 0, failures,
                              h / 2 ** max(stepper._levels, default=0), h, False)
 
     try:
         for n in range(n_steps):
             try:
                 v_old = v
-                q, v, vdot, a, its, res, cor, ref, sub, fails, h_last = stepper.advance(q, v, vdot, a, t)
+                step = stepper.advance(q, v, vdot, a, t)
             except _StepFailure as exc:
                 return result(False, f"step {n + 1} from t = {t:.6g} failed: {exc}")
+            q, v, vdot, a = step.state, step.v, step.vdot, step.a
             t, done = t_start + (n + 1) * h, n + 1  # no call since advance(): an interrupt cannot fall between
-            substeps, failures, failed_since = substeps + sub, failures + fails, failed_since + fails
-            f_new = _damping_force(dyn, q, v)
-            dissipated += 0.25 * h * float((v_old + v) @ (f_damp + f_new))
-            f_damp = f_new
+            substeps, failures = substeps + step.substeps, failures + step.failures
+            failed_since += step.failures
+            book.accept(h, v_old, q, v)
             if (first_step + n + 1) % record_every == 0 or n + 1 == n_steps:
-                rec = _record(dyn, first_step + n + 1, t, q, v, its, res, cor, ref, sub, t0, dissipated)
-                rec.motion = {"v": v, "vdot": vdot, "a": a}
-                rec.h, rec.rejected_newton, failed_since = h_last, failed_since, 0
-                records.append(rec)
-                last = n + 1
-                if on_step is not None:
-                    on_step(rec, q, v)
+                failed, failed_since = failed_since, 0
+                book.record(first_step + n + 1, t, q, v, vdot, a, step.iterations, step.residuals, step.corrections,
+                            step.refreshes, step.substeps, h=step.h, rejected_newton=failed)
     except KeyboardInterrupt:  # Ctrl-C / a stop request: hand the last converged step over, then stop
-        if on_step is not None and done > last:
-            rec = _record(dyn, first_step + done, t, q, v, 0, [], [], 0, 1, t0, dissipated)
-            rec.motion = {"v": v, "vdot": vdot, "a": a}
-            on_step(rec, q, v)
+        book.interrupted(first_step + done, t, q, v, vdot, a)
         raise
     return result(True, "completed")

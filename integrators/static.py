@@ -1,7 +1,12 @@
 """Static equilibrium paths: load control with adaptive steps and cut-back, and arc-length (Crisfield).
 
-The model supplies ``residual(q, lam)``, ``residual_and_tangent(q, lam)``, ``external_force(q)``,
-``update(q, dq)`` and ``initial_state()``; the residual is r = f_int(q) - lam f_ext(q). A run never returns
+The model is a :class:`integrators.protocols.StaticProblem`: ``residual(q, lam)``, ``residual_and_tangent(q,
+lam)``, ``external_force(q)``, ``update(q, dq)``, ``initial_state()``, ``conjugate(q, dq)`` and ``dof_scale``;
+the residual is r = f_int(q) - lam f_ext(q). Opt-in capabilities, used when present: the mixed iteration
+(:class:`~integrators.protocols.MixedIteration`), a check of the supports
+(:class:`~integrators.protocols.SupportCheck`) and the conjugate map of the stability analysis
+(:class:`~integrators.protocols.ConjugateMatrix`); a model that lacks a required member is refused before
+the first step with a one-line ``TypeError`` naming it. A run never returns
 garbage: a step that fails is cut back down to ``min_step``, then the run stops with a report and the last
 converged state.
 """
@@ -17,6 +22,8 @@ import numpy as np
 
 from integrators.linear import LinearSolver, SingularMatrixError, inertia
 from integrators.newton import NewtonSettings, NewtonStats, newton_solve, work_norm
+from integrators.protocols import (ConjugateMatrix, MixedIteration, StaticProblem, StressedState, SupportCheck,
+                                   require)
 
 
 @dataclass
@@ -145,12 +152,13 @@ def _step_load(model, state, lam: float) -> tuple[np.ndarray, float]:
     return load, work_norm(load, model.dof_scale)
 
 
-def _check_support(model) -> None:
-    """A static run needs every rigid-body motion restrained (else the stiffness is singular): models that
-    can tell (``check_static_support``) are asked before the first step."""
-    check = getattr(model, "check_static_support", None)
-    if callable(check):
-        check()
+def _check_support(model: StaticProblem) -> None:
+    """Before the first step: the model must be a :class:`StaticProblem` (a one-line ``TypeError`` names
+    what it lacks), and a static run needs every rigid-body motion restrained (else the stiffness is
+    singular): models that can tell (:class:`SupportCheck`) are asked."""
+    require(model, StaticProblem, "the static problem")
+    if isinstance(model, SupportCheck):
+        model.check_static_support()
 
 
 def _history(residuals) -> list[str]:
@@ -172,7 +180,8 @@ def _mixed(model, settings: NewtonSettings) -> bool:
     displacement iteration: on a factorization kept from older iterates the mixed iteration converges worse
     than the displacement one (refresh ratio 0.5: hemisphere 104 factorizations against 77, end moment 1102
     against 139; docs/performance.md), on fresh ones far better (hemisphere 47)."""
-    return settings.mixed and settings.policy == "full" and getattr(model, "supports_mixed_iteration", False)
+    return settings.mixed and settings.policy == "full" and isinstance(model, MixedIteration) \
+        and model.supports_mixed_iteration
 
 
 def _with_stresses(model, state, settings: NewtonSettings):
@@ -257,15 +266,14 @@ def _load_compliance(model, state, lam: float) -> float:
     the compliance of the load path, dW/dlam per unit load. It grows without bound at a limit point,
     where the tangent turns singular along the load, and changes sign beyond it (at a bifurcation, where the
     buckling mode is orthogonal to the load, it stays bounded)."""
-    if getattr(state, "stress", None) is not None:
+    if isinstance(state, StressedState) and state.stress is not None:
         state = dataclasses.replace(state, stress=None)   # the tangent itself, not a mixed iteration matrix
     _, K = model.residual_and_tangent(state, lam)
     solver = LinearSolver()
     solver.factorize(K)
     f = model.external_force(state)
     v = solver.solve(f)
-    conjugate = getattr(model, "conjugate", None)
-    return float((conjugate(state, v) if conjugate is not None else v) @ f)
+    return float(model.conjugate(state, v) @ f)
 
 
 def stability_matrix(model, state, lam: float):
@@ -279,13 +287,12 @@ def stability_matrix(model, state, lam: float):
     follower loads) is dropped: A = sym(T^T K), g = T^T f. The stresses of a mixed iteration are dropped
     first (the tangent of the state itself).
     """
-    if getattr(state, "stress", None) is not None:
+    if isinstance(state, StressedState) and state.stress is not None:
         state = dataclasses.replace(state, stress=None)
     _, K = model.residual_and_tangent(state, lam)
     f = model.external_force(state)
-    conjugate_matrix = getattr(model, "conjugate_matrix", None)
-    if conjugate_matrix is not None:
-        T = conjugate_matrix(state)
+    if isinstance(model, ConjugateMatrix):
+        T = model.conjugate_matrix(state)
         K, f = T.T @ K, T.T @ f
     return (0.5 * (K + K.T)).tocsc(), f
 
@@ -353,7 +360,7 @@ def _limit_point(model, previous, last, trial: float) -> float | None:
     return lam_limit if lam_limit <= trial + (trial - lam1) else None
 
 
-def load_control(model, load_factors=None, *, n_steps: int = 10, settings: NewtonSettings | None = None,
+def load_control(model: StaticProblem, load_factors=None, *, n_steps: int = 10, settings: NewtonSettings | None = None,
                  min_step: float = 1e-4, max_step: float | None = None, adaptive: bool = True,
                  on_step: Callable | None = None, state=None, predictor: str = "tangent",
                  grow_iterations: int | None = None, load_factor: float = 0.0,
@@ -497,7 +504,7 @@ def load_control(model, load_factors=None, *, n_steps: int = 10, settings: Newto
     return StaticResult(state, lam, records, stats, True, "completed", time.perf_counter() - t0, cutbacks)
 
 
-def arc_length(model, *, lam_max: float = 1.0, initial_increment: float = 0.05, max_steps: int = 500,
+def arc_length(model: StaticProblem, *, lam_max: float = 1.0, initial_increment: float = 0.05, max_steps: int = 500,
                settings: NewtonSettings | None = None, min_increment_ratio: float = 1e-3,
                max_increment_ratio: float = 25.0, desired_iterations: int = 5,
                max_load_increment: float | None = None,
