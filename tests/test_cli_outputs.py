@@ -228,8 +228,8 @@ class FailsLate(Model):
         r = super().residual(state, lam)
         return r * np.nan if lam > 0.0105 else r
 
-    def residual_and_tangent(self, state, lam):
-        r, K = super().residual_and_tangent(state, lam)
+    def residual_and_tangent(self, state, lam, **options):
+        r, K = super().residual_and_tangent(state, lam, **options)
         return (r * np.nan if lam > 0.0105 else r), K
 
 
