@@ -10,13 +10,12 @@ Decorators (all cached in :data:`flexbody.kernel_cache.CACHE_DIR` when it is usa
   numpy's error model (a division by zero gives inf/nan, no exception check), FMA contraction allowed
   (results agree with the numpy reference to round-off), no reference counting (``_nrt=False``; otherwise
   every array argument costs an atomic incref/decref per call) and ``noalias`` array arguments (below).
-- :data:`inline`: :data:`fast` inlined at numba-IR level into its callers (small helpers of the point loops
-  only: numba's front end grows faster than linearly with a function's size, so a large body inlined costs
-  more to compile than the same body compiled on its own; docs/performance.md).
+- :data:`inline`: :data:`fast` inlined at numba-IR level into its callers (small helpers of the point loops).
 - :data:`entry`: :data:`fast` without the GIL: the element loops over a chunk of elements, called from Python
   (:func:`flexbody.chunks.run_chunks` runs several chunks on threads). They replace numba's ``parallel=True``
   loops, whose parfor compilation cost a first run about 20 s of CPU (re-optimizing every inlined kernel once
   more) for the element kernels alone, and which one-thread runs (all the built-in scenes) never needed.
+- :data:`parallel`: numba's defaults plus ``parallel=True`` (no flexbody kernel uses it now).
 - :func:`prefetch`: an intrinsic that prefetches the cache line of one array element (a hint, never a fault).
 - :data:`uint`: ``numba.uint64``, for unsigned inner-loop indices with run-time bounds (lets LLVM vectorize).
 
@@ -97,6 +96,7 @@ released = numba.njit(cache=CACHE, nogil=True)
 fast = numba.njit(**FAST_FLAGS)
 inline = numba.njit(inline="always", **FAST_FLAGS)
 entry = numba.njit(nogil=True, **FAST_FLAGS)
+parallel = numba.njit(cache=CACHE, parallel=True)
 uint = numba.uint64
 
 # llvm.prefetch is overloaded on the pointer type: "p0" with opaque pointers (LLVM >= 15), "p0i8" before

@@ -41,13 +41,12 @@ switch, the Taylor series ``so3.SERIES`` fused below), and the maps that take th
 ``d2_tangent_co_into``; a point needs up to eight), inlined.
 
 Performance notes: the small helpers are inlined at numba-IR level so that the per-point functions contain no
-calls (the large stages of the point tangent, _geometric_core and _expand_core*, are compiled on their own:
-inlined into _points_tangent they doubled its compile time); the kernels are compiled without reference
-counting and with noalias array arguments (see flexbody._numba), so that point data are read through views of
-the per-point arrays at no cost; the element loop runs inside one function per chunk of elements
-(flexbody.chunks: one chunk on one thread, a few per thread otherwise), whose workspaces are allocated once
-per thread and reused, and prefetches the next element's data. Nothing is allocated per element or point.
-The section stiffness must be symmetric.
+calls; the kernels are compiled without reference counting and with noalias array arguments (see flexbody._numba), so
+that point data are read through views of the per-point arrays at no cost; the element loop runs inside one
+function per chunk of elements (flexbody.chunks: one chunk on one thread, a few per thread otherwise), whose
+workspaces are allocated once per chunk, and
+prefetches the next element's data. Nothing is allocated per element or point. The section stiffness must be
+symmetric.
 """
 
 from __future__ import annotations
@@ -578,7 +577,7 @@ def _force_to_local(e, fz, fr, Ti, f):
             f[e, 3 + c] -= Ti[i, c, 0] * e0 + Ti[i, c, 1] * e1 + Ti[i, c, 2] * e2
 
 
-@jit
+@inl
 def _geometric_core(s, g, F, Q, T, R, X0, X1, d, da, co, core, ns, with_uu, t0, t1, t2, t3, t4, t5):
     """core (slots) = G_xi^T Hf(s) G_xi + second variation contracted with g = D^T s (less the node terms).
 
@@ -786,7 +785,7 @@ def _section_cov(e, to_cart, weights, C, cblk, CT, Ch):
                         Ch[gg, r, c] += tk * CT[k, c]
 
 
-@jit
+@inl
 def _expand_core(core, ns, p, Y, Kz):
     """Kz += Pi^T core Pi (z padded, NZ) on the accumulation pattern (see _KR).
 
@@ -923,7 +922,7 @@ def _expand_core(core, ns, p, Y, Kz):
                 Kz[b + 5, k] += n5 * v
 
 
-@jit
+@inl
 def _expand_core_rot(core, ns, p, Y, Kz):
     """Kz += Pi^T core Pi restricted to the rotation columns (core without its translation-translation block)."""
     nr = 3 * ns
