@@ -37,8 +37,39 @@ def _compile(model: Model) -> float:
     return time.perf_counter() - t0
 
 
+class _Outcome:
+    """What a static and a dynamic solution both read off the integrator's result (``self.result``)."""
+
+    result: object
+
+    @property
+    def state(self) -> ShellState:
+        """The last converged state (the initial state if no step converged)."""
+        return self.result.state
+
+    @property
+    def converged(self) -> bool:
+        """True if the solve reached its end (the last load level, or ``end_time``)."""
+        return bool(self.result.converged)
+
+    @property
+    def message(self) -> str:
+        """"completed", or where and why the solve stopped."""
+        return str(self.result.message)
+
+    @property
+    def stats(self) -> NewtonStats:
+        """Newton iterations, iteration-matrix updates and factorizations of the whole solve."""
+        return self.result.stats
+
+    @property
+    def wall_time_s(self) -> float:
+        """Seconds of the solve (after compilation)."""
+        return float(self.result.wall_time)
+
+
 @dataclass
-class StaticSolution:
+class StaticSolution(_Outcome):
     """The equilibrium path of a static solve.
 
     Attributes
@@ -67,34 +98,9 @@ class StaticSolution:
     compile_time_s: float = 0.0
 
     @property
-    def state(self) -> ShellState:
-        """The last converged state (the initial state if no step converged)."""
-        return self.result.state
-
-    @property
     def load_factor(self) -> float:
         """The load factor of the last converged state."""
         return float(self.result.load_factor)
-
-    @property
-    def converged(self) -> bool:
-        """True if the path reached its last load level."""
-        return bool(self.result.converged)
-
-    @property
-    def message(self) -> str:
-        """"completed", or where and why the run stopped."""
-        return str(self.result.message)
-
-    @property
-    def stats(self) -> NewtonStats:
-        """Newton iterations, tangent updates, factorizations and residual evaluations of the whole path."""
-        return self.result.stats
-
-    @property
-    def wall_time_s(self) -> float:
-        """Seconds of the solve (after compilation)."""
-        return float(self.result.wall_time)
 
     def displacements(self, state: ShellState | None = None) -> np.ndarray:
         """Nodal displacements x - X (n, 3) of ``state`` (default: the last converged one).
@@ -108,7 +114,7 @@ class StaticSolution:
 
 
 @dataclass
-class DynamicSolution:
+class DynamicSolution(_Outcome):
     """The motion computed by a dynamic solve.
 
     Attributes
@@ -146,34 +152,9 @@ class DynamicSolution:
         return self.dynamic_model.model
 
     @property
-    def state(self) -> ShellState:
-        """The last converged state."""
-        return self.result.state
-
-    @property
     def time(self) -> float:
         """The time reached (``end_time`` if the run completed)."""
         return float(self.result.time)
-
-    @property
-    def converged(self) -> bool:
-        """True if the run reached ``end_time``."""
-        return bool(self.result.converged)
-
-    @property
-    def message(self) -> str:
-        """"completed", or at which step and why the run stopped."""
-        return str(self.result.message)
-
-    @property
-    def stats(self) -> NewtonStats:
-        """Newton iterations and iteration-matrix refreshes of the whole run."""
-        return self.result.stats
-
-    @property
-    def wall_time_s(self) -> float:
-        """Seconds of the time integration (after compilation)."""
-        return float(self.result.wall_time)
 
     def energies(self) -> dict[str, np.ndarray]:
         """The energies at the recorded times: "kinetic", "strain", "gravity" (potential), "dissipated" (the
