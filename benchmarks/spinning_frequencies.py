@@ -36,7 +36,7 @@ import time
 import numpy as np
 from scipy.optimize import least_squares
 
-from benchmarks.spinning_membranes import ANNULUS, HUB, OMEGA, _scene
+from spinning_membranes import ANNULUS, HUB, OMEGA, _scene   # this script's folder is first on sys.path
 
 A = 0.2
 PERIOD = 2 * math.pi / OMEGA

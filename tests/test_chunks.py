@@ -97,12 +97,12 @@ def _elements(m: int, seed: int = 0):
 
 def test_element_kernels_give_the_same_bits_on_one_and_two_threads(threads):
     from flexbody.shell.element import internal_force_tangent_batch, linearized_strains_batch
-    from flexbody.shell.element_reference import assumed_strain_maps
     from flexbody.shell.material import ShellMaterial
+    from flexbody.shell.variants import MITC6
 
     threads(2)
     C = ShellMaterial(young=1.0e3, poisson=0.3, thickness=0.1).section()
-    A = assumed_strain_maps(True)
+    A = MITC6().maps
     args = _elements(3 * chunks.MIN_PARALLEL)
     dh = np.random.default_rng(1).normal(size=(len(args[0]), 36))
     results = []
