@@ -170,7 +170,7 @@ def clamp(mesh: "Tri6Mesh", nodes: str | Sequence[str] | Sequence[int] | np.ndar
     >>> fb.clamp(mesh, "clamped").nodes.tolist()
     [0, 1, 2]
     """
-    return Fix(nodes_of(mesh, nodes), "all")
+    return fix(mesh, nodes, "all")
 
 
 def fix(mesh: "Tri6Mesh", nodes: str | Sequence[str] | Sequence[int] | np.ndarray,

@@ -155,6 +155,13 @@ def edges_of(mesh: "Tri6Mesh", sets: str | Sequence[str] | np.ndarray) -> np.nda
     return edges[np.sort(first)]
 
 
+def _edge_loads(mesh: "Tri6Mesh", sets, density, kind: str) -> list[NodalLoad]:
+    """Consistent nodal forces or moments (``kind``) of a density per unit reference length on edges."""
+    vectors = nodal_vectors_from_edges(mesh.nodes, edges_of(mesh, sets), _as_vector(density, f"edge {kind} density"),
+                                       mesh.n_nodes)
+    return nodal_loads(vectors, kind)
+
+
 def edge_force(mesh: "Tri6Mesh", sets: str | Sequence[str] | np.ndarray,
                density: Sequence[float] | np.ndarray) -> list[NodalLoad]:
     """A dead force per unit reference length on edges, as consistent nodal forces.
@@ -182,9 +189,7 @@ def edge_force(mesh: "Tri6Mesh", sets: str | Sequence[str] | np.ndarray,
     >>> round(float(sum(load.force[2] for load in loads)), 12)      # density x edge length
     2.0
     """
-    vectors = nodal_vectors_from_edges(mesh.nodes, edges_of(mesh, sets), _as_vector(density, "edge force density"),
-                                       mesh.n_nodes)
-    return nodal_loads(vectors, "force")
+    return _edge_loads(mesh, sets, density, "force")
 
 
 def edge_moment(mesh: "Tri6Mesh", sets: str | Sequence[str] | np.ndarray,
@@ -205,9 +210,7 @@ def edge_moment(mesh: "Tri6Mesh", sets: str | Sequence[str] | np.ndarray,
     list[NodalLoad]
         One load per loaded node (the TOML ``type = "edge_moment"``).
     """
-    vectors = nodal_vectors_from_edges(mesh.nodes, edges_of(mesh, sets), _as_vector(density, "edge moment density"),
-                                       mesh.n_nodes)
-    return nodal_loads(vectors, "moment")
+    return _edge_loads(mesh, sets, density, "moment")
 
 
 def elements_of(mesh: "Tri6Mesh", sets: str | Sequence[str] | np.ndarray | None) -> np.ndarray | None:
