@@ -136,8 +136,9 @@ class ShellBody:
             if tying is None and not isinstance(key, (bool, np.bool_, str)):
                 raise TypeError("element must be an element variant of flexbody.shell.variants (MITC6(), "
                                 f"MITC6(membrane='point'), MITC7(), NoTying()), got {key!r}")
-            self.element = variant_from_key(key)
-            warnings.warn(f"ShellBody(tying={key!r}) is deprecated: pass element={self.element!r} "
+            given = "tying" if tying is not None else "element"
+            self.element = variant_from_key(key, given)
+            warnings.warn(f"ShellBody({given}={key!r}) is deprecated: pass element={self.element!r} "
                           "(flexbody.shell.variants)", DeprecationWarning, stacklevel=3)
         if self.kernel not in ("numba", "reference"):
             raise ValueError(f"kernel must be 'numba' or 'reference', got {self.kernel!r}")

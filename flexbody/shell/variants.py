@@ -434,8 +434,9 @@ class MITC7:
         return element_reference.strain_energy(x, frames, geom, section, self.maps, b)
 
 
-def variant_from_key(value: object) -> ElementVariant:
-    """The element variant that a scene file's ``tying`` value names.
+def variant_from_key(value: object, name: str = "tying") -> ElementVariant:
+    """The element variant that a scene file's ``tying`` value names (``name``: the key or argument that gave
+    it, for the error message).
 
     ======================  ==========================
     ``tying``               variant
@@ -458,4 +459,4 @@ def variant_from_key(value: object) -> ElementVariant:
             return MITC6(membrane=value)
         if value == "mitc7":
             return MITC7()
-    raise ValueError(f"tying must be true, false or one of {', '.join(map(repr, VARIANT_KEYS))}, got {value!r}")
+    raise ValueError(f"{name} must be true, false or one of {', '.join(map(repr, VARIANT_KEYS))}, got {value!r}")
