@@ -341,6 +341,15 @@ def steady_spin(dynamic: DynamicModel, omega, center=None, *, time: float = 0.0,
 # --------------------------------------------------------------------------------------------------------
 # A dynamic run that starts on the steady spin
 # --------------------------------------------------------------------------------------------------------
+#: rho_inf by default of a run that starts on the steady spin with a driven hub
+#: (:func:`flexbody.scenes.analysis.default_rho_inf`). A kick on a spinning thin membrane excites director
+#: (transverse-shear) oscillations far above any resolved frequency; at rho_inf = 0.9 they decay by 0.9 a step
+#: and dominate the predictor's error: on the 4 x 32 hub annulus (h/R 1e-3, 100 steps a revolution) the first
+#: Newton correction is ~300 x larger than at 0.5, and the 16 x 128 mesh at h/R 1e-6 fails within the first
+#: revolution at 0.9 and completes at 0.5. The transverse frequencies of the membrane (omega h ~ 0.06) move by
+#: less than 5e-4 relative between the two (docs/dynamics.md, "Spinning membranes").
+STEADY_SPIN_RHO_INF = 0.5
+
 @dataclass(frozen=True)
 class SteadySpinStart:
     """The initial condition "the steady spin at ``angular_velocity`` about the axis through ``center``".

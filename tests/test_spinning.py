@@ -185,3 +185,26 @@ def test_the_10m_sail_under_a_rim_pulse_runs_at_default_settings():
     assert summary.result.converged, summary.result.message
     w = np.asarray(summary.history["w_corner"])
     assert w[-1] > 0 and np.all(np.isfinite(w))          # pushed out of plane along the pulse
+
+
+def test_rho_inf_defaults_to_the_steady_spin_value_only_with_a_driven_hub(tmp_path):
+    """Without rho_inf a steady-spin start on a driven hub integrates at STEADY_SPIN_RHO_INF (the kicked thin
+    annulus of 16 x 128 cells fails at 0.9); a free body and a start from rest keep 0.9; a given value wins."""
+    from flexbody.scenes.analysis import DEFAULT_RHO_INF
+    from flexbody.spinning import STEADY_SPIN_RHO_INF
+    assert STEADY_SPIN_RHO_INF < DEFAULT_RHO_INF
+    hub = load_toml_scene(EXAMPLE).analysis
+    assert hub.rho_inf is None and hub.rho_inf_used == STEADY_SPIN_RHO_INF
+    assert hub.alpha_settings().rho_inf == STEADY_SPIN_RHO_INF
+    text = EXAMPLE.read_text()
+    text = text[:text.index("[reference]")]                 # its CSV lives beside the example
+    given = tmp_path / "given.toml"
+    given.write_text(text.replace('type = "dynamic"', 'type = "dynamic"\nrho_inf = 0.8'))
+    assert load_toml_scene(given).analysis.alpha_settings().rho_inf == 0.8
+    free = tmp_path / "free.toml"
+    start = text.index("[analysis.hub]")
+    free.write_text(text[:start] + text[text.index("[[output]]"):])   # the same membrane without its hub
+    assert load_toml_scene(free).analysis.rho_inf_used == DEFAULT_RHO_INF
+    still = tmp_path / "still.toml"
+    still.write_text(text.replace('state = "steady_spin"', 'state = "reference"'))
+    assert load_toml_scene(still).analysis.rho_inf_used == DEFAULT_RHO_INF

@@ -33,6 +33,25 @@ class StaticAnalysis:
     stability: bool = True
 
 
+#: rho_inf where a run does not give one
+DEFAULT_RHO_INF = 0.9
+
+
+def default_rho_inf(initial_state: object | None, prescribed: tuple) -> float:
+    """The spectral radius rho_inf of a dynamic run that does not give one.
+
+    0.9 (little numerical damping), except for a start on the steady spin with a driven hub (prescribed
+    motion): :data:`flexbody.spinning.STEADY_SPIN_RHO_INF`, whose stronger damping of the unresolved
+    high-frequency director (transverse-shear) oscillations a kick on a spinning thin membrane excites keeps
+    the modified Newton iteration contracting (docs/dynamics.md, "Spinning membranes"). A free body keeps 0.9:
+    its energy and momenta are the conserved quantities one checks, and 0.5 dissipates energy visibly.
+    """
+    from flexbody.spinning import STEADY_SPIN_RHO_INF, SteadySpinStart
+    if isinstance(initial_state, SteadySpinStart) and prescribed:
+        return STEADY_SPIN_RHO_INF
+    return DEFAULT_RHO_INF
+
+
 @dataclass(frozen=True, eq=False)
 class DynamicAnalysis:
     """Time integration from t = 0 to ``end_time`` with the Lie-group generalized-alpha method.
@@ -41,7 +60,9 @@ class DynamicAnalysis:
     ----------
     time_step : h (rounded down so that whole steps end at ``end_time``)
     end_time : the end of the run
-    rho_inf : spectral radius at infinite frequency in [0, 1] (1: no numerical damping)
+    rho_inf : spectral radius at infinite frequency in [0, 1] (1: no numerical damping); None: the default of
+        the start (:func:`default_rho_inf`: 0.5 for a steady-spin start with a driven hub, else 0.9); the
+        value used is :attr:`rho_inf_used`
     policy : iteration matrix "modified" (kept across iterations and steps, refreshed when the contraction
         is poor) or "full" (refreshed every iteration)
     output_every : record the outputs, energies and momenta (and write the files) every k-th step
@@ -84,7 +105,7 @@ class DynamicAnalysis:
 
     time_step: float
     end_time: float
-    rho_inf: float = 0.9
+    rho_inf: float | None = None
     policy: str = "modified"
     output_every: int = 1
     gravity: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -110,7 +131,8 @@ class DynamicAnalysis:
         if self.end_time / self.time_step > self.MAX_TIME_STEPS:
             raise ValueError(f"end_time / time_step asks for {self.end_time / self.time_step:.3g} time steps, at most "
                              f"{self.MAX_TIME_STEPS} (time_step {self.time_step!r}, end_time {self.end_time!r})")
-        if isinstance(self.rho_inf, bool) or not isinstance(self.rho_inf, (int, float)) or not 0 <= self.rho_inf <= 1:
+        if self.rho_inf is not None and (isinstance(self.rho_inf, bool) or not isinstance(self.rho_inf, (int, float))
+                                         or not 0 <= self.rho_inf <= 1):
             raise ValueError(f"rho_inf must lie in [0, 1], got {self.rho_inf!r}")
         if self.policy not in ("modified", "full"):
             raise ValueError(f"policy must be 'modified' or 'full', got {self.policy!r}")
@@ -131,6 +153,13 @@ class DynamicAnalysis:
         check_mass_kind(self.mass)
 
     @property
+    def rho_inf_used(self) -> float:
+        """The spectral radius the run uses: ``rho_inf``, or without one the default of its start."""
+        if self.rho_inf is not None:
+            return float(self.rho_inf)
+        return default_rho_inf(self.initial_state, self.prescribed)
+
+    @property
     def n_steps(self) -> int:
         """The number of time steps (as :func:`integrators.generalized_alpha.generalized_alpha` takes them)."""
         return max(1, int(np.ceil(self.end_time / self.time_step - 1e-9)))
@@ -145,7 +174,7 @@ class DynamicAnalysis:
         """The :class:`integrators.generalized_alpha.AlphaSettings` of this analysis."""
         from integrators.generalized_alpha import AlphaSettings
         base = self.settings if self.settings is not None else AlphaSettings()
-        out = replace(base, rho_inf=float(self.rho_inf), policy=self.policy)
+        out = replace(base, rho_inf=self.rho_inf_used, policy=self.policy)
         return out if self.adaptive is None else replace(out, adaptive=self.adaptive)
 
     @property

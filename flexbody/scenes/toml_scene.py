@@ -469,7 +469,7 @@ def _build_dynamic_analysis(t: Table, body, hub_nodes: np.ndarray | None, load_f
     from flexbody.time_functions import GroupFactors, Ramp, constant
     t.string("type", choices=("static", "dynamic"))
     dt, end = t.number("dt", positive=True), t.number("end_time", positive=True)
-    rho_inf = t.number("rho_inf", 0.9)
+    rho_inf = t.number("rho_inf", None)       # None: the default of the start (scenes.analysis.default_rho_inf)
     policy = t.string("policy", "modified", choices=("modified", "full"))
     every = t.integer("output_every", 1)
     adaptive = t.boolean("adaptive") if t.has("adaptive") else None

@@ -337,7 +337,7 @@ def hub_driven_membrane_in_exudyn(params: dict | None = None, flexbody_alone: bo
     mbs.SetPreStepUserFunction(shell.commit)
     mbs.Assemble()
     steps = round(a.end_time / a.time_step)
-    s = dynamic_settings(a.end_time, steps, a.rho_inf)
+    s = dynamic_settings(a.end_time, steps, a.rho_inf_used)
     s.timeIntegration.newton.relativeTolerance = rtol
     s.timeIntegration.adaptiveStep = adaptive_step
     converged, message, wall, _ = run_solver(

@@ -182,7 +182,7 @@ def build_dynamic_model(scene: Scene, options: dict | None = None, time_step: fl
     t0 = time.perf_counter()
     sc, mbs, raw_outputs, description, elements, v0, w, element_numbers = spinning_plate_model(scene, nx, ny)
     model = ExudynDynamicModel(scene.name, kind, description, sc, mbs, [], np.zeros(0), np.zeros((0, 0)),
-                               np.zeros((0, 0)), w, v0, h, t_end, float(a.rho_inf), elements,
+                               np.zeros((0, 0)), w, v0, h, t_end, a.rho_inf_used, elements,
                                record_every=max(1, int(a.output_every)), element_numbers=element_numbers)
     mbs.SetPreStepUserFunction(_record_step(model))
     mbs.Assemble()
