@@ -152,6 +152,7 @@ class DynamicRunSummary(RunSummary):
     rotation_per_step : the largest rotation per time step |omega| h over the recorded instants
         (:func:`flexbody.scenes.dynamic_run.rotation_rate`) and its time
     size : the diagonal of the body's bounding box in the reference configuration
+    last_step : the number of the last recorded time step after the start (0 if none was)
     """
 
     kind: ClassVar[str] = "dynamic"
@@ -164,6 +165,7 @@ class DynamicRunSummary(RunSummary):
     conservative: bool
     rotation_per_step: tuple[float, float] = (0.0, 0.0)
     size: float = 0.0
+    last_step: int = 0
 
     @property
     def largest_step(self) -> float:
@@ -188,7 +190,7 @@ class DynamicRunSummary(RunSummary):
     @property
     def steps(self) -> int:
         """Time steps taken (the last recorded one; all of them for a completed run)."""
-        return self.result.records[-1].step if self.result.records else 0
+        return self.last_step
 
     def energy_summary(self) -> dict:
         """Initial and final energies, and the largest drift of the balance T + W + V_g + D (module docstring;
