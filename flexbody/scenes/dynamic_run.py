@@ -140,7 +140,7 @@ class DynamicRun:
                                                           "angular_momentum")}
         self.h = a.end_time / a.n_steps
         self.turn = (0.0, 0.0)                   # the largest rotation per step so far, and its time
-        self.steps = 0                           # the last recorded step's number (0 before the first)
+        self.records: list = []                  # the step records after the start
 
     def record(self, rec, q, v, initial: bool = False) -> None:
         """Record a step: the nodal velocity fields for the output files, outputs, energies, momenta."""
@@ -208,7 +208,7 @@ class DynamicRun:
 
     def _record_step(self, rec, q, v) -> None:
         """Record a step after the start (an output step, or the last converged one of a stopped run)."""
-        self.steps = rec.step
+        self.records.append(rec)
         self.record(rec, q, v)
 
     def summary(self, result, errors: list[dict], wall: float, setup: float, compile_time: float) -> DynamicRunSummary:
@@ -216,6 +216,6 @@ class DynamicRun:
         size = float(np.linalg.norm(np.ptp(model.body.mesh.nodes, axis=0)))
         return DynamicRunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, self.history, errors,
                                  wall, setup, compile_time, analysis=self.analysis, energies=self.energies,
-                                 last_step=self.steps,
+                                 records=self.records,
                                  total_mass=self.dyn.inertia.total_mass, isolated=_is_isolated(scene),
                                  conservative=_is_conservative(scene), rotation_per_step=self.turn, size=size)
