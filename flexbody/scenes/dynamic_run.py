@@ -105,7 +105,7 @@ def _output_value(out, model, dyn, state, velocity: np.ndarray) -> float:
 
 def _steps_taken(result, a: DynamicAnalysis) -> int:
     """The number of time steps behind ``result.time`` (the fixed steps end on a grid; adaptive: counted)."""
-    if getattr(result, "adaptive", False):
+    if result.adaptive:
         return int(result.steps)
     return int(round(result.time / (a.end_time / a.n_steps)))
 
