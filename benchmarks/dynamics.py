@@ -35,6 +35,7 @@ from flexbody.dynamics import DynamicModel
 from flexbody.lie import so3
 from flexbody.mesh import generators
 from flexbody.shell.material import ShellMaterial
+from flexbody.energy import integrate_motion
 from integrators.generalized_alpha import AlphaSettings, generalized_alpha
 
 HEADER = ("| study | h | steps | policy | iterations | tangents | factorizations | wall time [s] | error "
@@ -78,14 +79,15 @@ def tumbling_study(steps_list, policies) -> list[str]:
     for n in steps_list:
         for policy in policies:
             hist = []
-            res = generalized_alpha(dyn, t_end, t_end / n, state=pre.state, velocity=pre.velocity,
-                                    settings=AlphaSettings(rho_inf=0.9, policy=policy),
-                                    on_step=lambda rec, q, v: hist.append((rec.time, dyn.rigid_angular_velocity(q, v))))
+            run = integrate_motion(dyn, t_end, t_end / n, state=pre.state, velocity=pre.velocity,
+                                   settings=AlphaSettings(rho_inf=0.9, policy=policy),
+                                   on_step=lambda rec, q, v: hist.append((rec.time, dyn.rigid_angular_velocity(q, v))))
+            res = run.result
             if not res.converged:
                 rows.append(f"| tumbling | {t_end / n:.3g} | {n} | {policy} | failed: {res.message} |")
                 continue
             err = max(np.linalg.norm(w - ref.sol(t)[:9].reshape(3, 3) @ ref.sol(t)[9:]) for t, w in hist)
-            recs = [res.initial] + res.records
+            recs = [run.initial] + run.records
             E = np.array([r.total_energy for r in recs])
             L = np.array([r.angular_momentum for r in recs])
             rows.append(_row("tumbling", t_end / n, n, policy, res, err / np.linalg.norm(w0),
@@ -154,9 +156,9 @@ def adaptive_study(tolerances, tumbling_steps, cantilever_steps) -> list[str]:
 
     def tumble(settings, h, every):
         hist = []
-        res = generalized_alpha(dyn, t_end, h, state=pre.state, velocity=pre.velocity, settings=settings,
-                                record_every=every,
-                                on_step=lambda rec, q, v: hist.append((rec.time, dyn.rigid_angular_velocity(q, v))))
+        res = integrate_motion(dyn, t_end, h, state=pre.state, velocity=pre.velocity, settings=settings,
+                               record_every=every,
+                               on_step=lambda rec, q, v: hist.append((rec.time, dyn.rigid_angular_velocity(q, v)))).result
         err = max((np.linalg.norm(w - ref.sol(t)[:9].reshape(3, 3) @ ref.sol(t)[9:]) for t, w in hist
                    if abs(t / 0.1 - round(t / 0.1)) < 1e-9), default=float("nan"))
         return res, err / np.linalg.norm(w0) if res.converged else float("nan")

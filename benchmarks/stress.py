@@ -427,7 +427,8 @@ def spin_run(dt_multiple: float, rho_inf: float, *, drive: str = "free", shape: 
     annulus on a rigid hub (annulus only) and the energy spread.
     """
     from flexbody.dynamics import DynamicModel, PrescribedMotion
-    from integrators.generalized_alpha import AlphaSettings, generalized_alpha
+    from flexbody.energy import integrate_motion
+    from integrators.generalized_alpha import AlphaSettings
     threads = _one_thread()
     try:
         t0 = time.perf_counter()
@@ -458,9 +459,10 @@ def spin_run(dt_multiple: float, rho_inf: float, *, drive: str = "free", shape: 
         def on_step(rec, q, vel):
             hist.append((rec.time, rec.total_energy, float(np.abs(q.x[:, 2]).max())))
 
-        out = generalized_alpha(dyn, t_end, dt, state=s, velocity=v, on_step=on_step,
-                                settings=AlphaSettings(rho_inf=rho_inf, max_cutbacks=max_cutbacks))
-        recs = [out.initial] + out.records
+        run = integrate_motion(dyn, t_end, dt, state=s, velocity=v, on_step=on_step,
+                               settings=AlphaSettings(rho_inf=rho_inf, max_cutbacks=max_cutbacks))
+        out = run.result
+        recs = [run.initial] + run.records
         E = np.array([rec.total_energy for rec in recs])
         L = np.array([rec.angular_momentum for rec in recs])
         E0 = E[0]
@@ -471,7 +473,7 @@ def spin_run(dt_multiple: float, rho_inf: float, *, drive: str = "free", shape: 
         if drive == "free":
             growth, change = (E.max() - E0) / E0, (E[-1] - E0) / E0
             drift = float(np.abs(L - L[0]).max() / np.linalg.norm(L[0]))
-            if out.records:
+            if run.records:
                 spin_ratio = float(dyn.rigid_angular_velocity(out.state, out.velocity)[2] / omega)
         else:
             growth = change = drift = nan
@@ -485,8 +487,8 @@ def spin_run(dt_multiple: float, rho_inf: float, *, drive: str = "free", shape: 
                 u = np.linalg.norm((out.state.x[outer] @ Q)[:, :2], axis=1) - np.linalg.norm(X[:, :2], axis=1)
                 exact = float(rotating_annulus_displacement(THIN["outer"], omega, "hub"))
                 stretch_error = float(u.mean() / exact - 1.0)
-        return SpinRun(out.converged, out.message, len(out.records), out.stats.iterations,
-                       out.stats.factorizations, sum(rec.substeps for rec in out.records), float(growth),
+        return SpinRun(out.converged, out.message, len(run.records), out.stats.iterations,
+                       out.stats.factorizations, sum(rec.substeps for rec in run.records), float(growth),
                        float(change), float(drift), spin_ratio, float(z_max), stretch_error, spread, dt,
                        time.perf_counter() - t0)
     finally:

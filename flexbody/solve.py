@@ -129,7 +129,7 @@ class DynamicSolution(_Outcome):
     velocities : list[np.ndarray]
         The free-DoF velocities v of the recorded states (:meth:`nodal_velocities` turns them into nodal
         ones); empty if ``keep_states`` was False.
-    records : list[integrators.generalized_alpha.DynamicStepRecord]
+    records : list[flexbody.energy.DynamicStepRecord]
         The step records of the recorded states, the initial one first: iterations, energies (kinetic,
         strain, gravity, dissipated), linear and angular momentum.
     result : integrators.generalized_alpha.DynamicResult
@@ -326,7 +326,8 @@ def solve_dynamic(model: Model, end_time: float, time_step: float, *, gravity: S
     from dataclasses import replace
 
     from flexbody.dynamics import DynamicModel
-    from integrators.generalized_alpha import AlphaSettings, generalized_alpha
+    from flexbody.energy import integrate_motion
+    from integrators.generalized_alpha import AlphaSettings
     model = _check_model(model)
     for name, value in (("end_time", end_time), ("time_step", time_step)):
         if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) or not (np.isfinite(value)
@@ -364,12 +365,11 @@ def solve_dynamic(model: Model, end_time: float, time_step: float, *, gravity: S
 
     compile_time = _compile(model)
     with _kernel_threads(model.body.mesh.n_elements):
-        result = generalized_alpha(dyn, float(end_time), float(time_step), state=q0, velocity=v0, settings=settings,
-                                   on_step=record, record_every=output_every)
-    if result.initial is not None:           # the state at t = 0 first
-        records.insert(0, result.initial)
-        times.insert(0, float(result.initial.time))
-        if keep_states:
-            states.insert(0, q0.copy())
-            velocities.insert(0, v0.copy())
-    return DynamicSolution(dyn, np.array(times), states, velocities, records, result, compile_time)
+        motion = integrate_motion(dyn, float(end_time), float(time_step), state=q0, velocity=v0, settings=settings,
+                                  on_step=record, record_every=output_every)
+    records.insert(0, motion.initial)        # the state at t = 0 first
+    times.insert(0, float(motion.initial.time))
+    if keep_states:
+        states.insert(0, q0.copy())
+        velocities.insert(0, v0.copy())
+    return DynamicSolution(dyn, np.array(times), states, velocities, records, motion.result, compile_time)

@@ -25,12 +25,11 @@ is approximated by the identity, both in the iteration matrix only; the residual
 recomputed as q_n o exp(x), v_{n+1} from the integration formulas). The approximations change the
 convergence rate of the iterations, not their fixed point.
 
-Dissipated work: with damping, D(t) = int_0^t v . f_d dt is carried in the records, so that T + W + V_g + D
-is the conserved balance of an otherwise conservative body. Per step, D += h v_m . f_m with the means
-v_m = (v_n + v_{n+1}) / 2, f_m = (f_d,n + f_d,n+1) / 2 (``dyn.damping_force(q, v)``): the work of the mean
-damping force on the step's displacement h v_m, which for rho_inf = 1 (h dq_n = h v_m) is the scheme's own
-energy loss on a linear system (the trapezoidal rule's energy identity). The trapezoid of the power
-v . f_d instead overestimates it on overdamped modes, whose velocities alternate in sign.
+Observers: the integrator computes no energies, momenta nor dissipated work. Every accepted step (and the start)
+is given to the run's observers (:class:`integrators.protocols.StepObserver`) as an
+:class:`integrators.protocols.AcceptedStep`: time, step size, state, v, vdot, a, the Newton work and the step
+counts, and whether it is an output step (every ``record_every``-th); the model's observers evaluate what they
+need from it (for the shell: :class:`flexbody.energy.EnergyAccount`).
 
 Convergence and tangent reuse: a weighted RMS norm of the correction,
 ||Dx||_w = sqrt(mean((Dx_i / (atol s_i + rtol |x_i|))^2)) with s_i the DoF scale (model size for
@@ -99,15 +98,15 @@ import dataclasses
 
 from dataclasses import dataclass
 import time
-from typing import Callable
+from typing import Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
 
 from integrators.linear import LinearSolver, SingularMatrixError
 from integrators.newton import NewtonStats
-from integrators.protocols import (Damped, DynamicProblem, MassMatrix, Prescribed, TransferAlongMotion,
-                                   WrapsStaticProblem, require)
+from integrators.protocols import (AcceptedStep, Capabilities, DynamicProblem, StepObserver, capabilities,
+                                   require)
 
 
 @dataclass(frozen=True)
@@ -198,56 +197,20 @@ class AlphaSettings:
             raise ValueError(f"safety must lie in (0, 1], got {self.safety!r}")
 
 
-@dataclass
-class DynamicStepRecord:
-    """One converged time step."""
-
-    step: int
-    time: float
-    iterations: int
-    residuals: list[float]            # ||r|| at each iterate
-    corrections: list[float]          # weighted RMS norm of each correction
-    refreshed: int                    # iteration-matrix refreshes in this step
-    substeps: int                     # 1, or the number of sub-steps after cut-backs
-    kinetic_energy: float
-    strain_energy: float
-    potential_energy: float           # gravity
-    linear_momentum: np.ndarray
-    angular_momentum: np.ndarray
-    wall_time: float
-    dissipated_energy: float = 0.0    # D(t), the work of the damping forces since the start
-    #: the step's end values on the free DoFs {"v", "vdot", "a"}: set for the records given to ``on_step``
-    motion: dict | None = None
-    h: float = 0.0                    # the size of the last step taken (of the last sub-step after cut-backs)
-    rejected_error: int = 0           # steps rejected by the error estimate since the previous record
-    rejected_newton: int = 0          # steps whose Newton iteration failed since the previous record
-    error_estimate: float = float("nan")  # the last step's weighted local error estimate (adaptive; <= 1)
-
-    @property
-    def total_energy(self) -> float:
-        """The mechanical energy T + W + V_g (without the dissipated work)."""
-        return self.kinetic_energy + self.strain_energy + self.potential_energy
-
-    @property
-    def energy_balance(self) -> float:
-        """T + W + V_g + D: conserved by an otherwise conservative body, damped or not."""
-        return self.total_energy + self.dissipated_energy
-
-
-@dataclass
+@dataclass(frozen=True)
 class DynamicResult:
+    """The end of a run: the last converged step's values, the Newton statistics and the step counts (what the
+    run went through step by step is for the observers, :class:`integrators.protocols.StepObserver`)."""
+
     state: object
     velocity: np.ndarray
     acceleration: np.ndarray          # vdot
     pseudo_acceleration: np.ndarray   # a
     time: float
-    records: list[DynamicStepRecord]
     stats: NewtonStats
-    initial: DynamicStepRecord | None = None
     converged: bool = True
     message: str = "completed"
     wall_time: float = 0.0
-    dissipated_energy: float = 0.0    # D at ``time``
     steps: int = 0                    # accepted steps (sub-steps after cut-backs counted)
     rejected_error: int = 0           # steps rejected by the error estimate (adaptive)
     rejected_newton: int = 0          # steps whose Newton iteration failed (retried smaller)
@@ -265,6 +228,30 @@ class _Step:
     v: np.ndarray
     vdot: np.ndarray
     a: np.ndarray
+
+
+@dataclass(frozen=True)
+class StepSolution:
+    """A converged step of :meth:`GeneralizedAlpha.step`: the end values on the free DoFs and the Newton work."""
+
+    state: object
+    v: np.ndarray                     # v_{n+1} (n,)
+    vdot: np.ndarray                  # vdot_{n+1} (n,)
+    a: np.ndarray                     # a_{n+1} (n,), the pseudo-acceleration
+    iterations: int
+    residuals: list[float]            # ||r|| at each iterate
+    corrections: list[float]          # weighted RMS norm of each correction
+    refreshes: int                    # iteration-matrix refreshes
+
+
+@dataclass(frozen=True)
+class _Attempt:
+    """One try at a step (:meth:`GeneralizedAlpha._attempt`): its solution, or None and why it failed; and
+    whether a fresh iteration matrix was used (a failure with only old ones is retried with a fresh one)."""
+
+    solution: StepSolution | None
+    message: str
+    any_fresh: bool
 
 
 @dataclass(frozen=True)
@@ -289,10 +276,10 @@ class StepTaken:
 
     def then(self, second: "StepTaken") -> "StepTaken":
         """The two halves of a failed step: this one, then ``second`` from its end (the failed try counted)."""
-        return StepTaken(second.state, second.v, second.vdot, second.a, self.iterations + second.iterations,
-                         self.residuals + second.residuals, self.corrections + second.corrections,
-                         self.refreshes + second.refreshes, self.substeps + second.substeps,
-                         self.failures + second.failures + 1, second.h)
+        return StepTaken(second.state, second.v, second.vdot, second.a, iterations=self.iterations + second.iterations,
+                         residuals=self.residuals + second.residuals, corrections=self.corrections + second.corrections,
+                         refreshes=self.refreshes + second.refreshes, substeps=self.substeps + second.substeps,
+                         failures=self.failures + second.failures + 1, h=second.h)
 
 
 def weighted_rms(dx: np.ndarray, x: np.ndarray, scale, settings: AlphaSettings) -> float:
@@ -310,10 +297,10 @@ def _predict(q_n, v_n, vdot_n, a_n, h: float, p: AlphaParameters, update: Callab
     return _Step(update(q_n, x), x, v, vdot, a)
 
 
-def _configuration(dyn, q_n, x: np.ndarray, t: float):
+def _configuration(dyn, caps: Capabilities, q_n, x: np.ndarray, t: float):
     """q_{n+1} = q_n o exp(x) on the free DoFs, the prescribed nodes at their place at t_{n+1}."""
     q = dyn.update(q_n, x)
-    return dyn.prescribe(q, t) if isinstance(dyn, Prescribed) else q
+    return caps.prescribed.prescribe(q, t) if caps.prescribed is not None else q
 
 
 class GeneralizedAlpha:
@@ -321,8 +308,7 @@ class GeneralizedAlpha:
 
     ``dyn`` is a :class:`integrators.protocols.DynamicProblem` (``residual(q, v, vdot, t)``,
     ``residual_and_tangent(q, v, vdot, t)``, ``update(q, dq)``, ``dof_scale``, ``n_dof``,
-    ``initial_acceleration``, and, for the records, ``kinetic_energy``, ``strain_energy``, ``gravity_potential``,
-    ``momenta``) with a mass (``mass_matrix()``, sparse n x n, or a diagonal ``mass`` (n,)); opt-in: damping
+    ``initial_acceleration``) with a mass (``mass_matrix()``, sparse n x n, or a diagonal ``mass`` (n,)); opt-in: damping
     (:class:`~integrators.protocols.Damped`), prescribed motion (:class:`~integrators.protocols.Prescribed`) and
     the transfer of the factorization along the motion (:class:`~integrators.protocols.TransferAlongMotion`);
     see :class:`flexbody.dynamics.DynamicModel`.
@@ -337,6 +323,7 @@ class GeneralizedAlpha:
         self.params = AlphaParameters.from_rho_inf(self.settings.rho_inf)
         self.solver = LinearSolver()
         self.stats = NewtonStats() if stats is None else stats
+        self.caps = capabilities(dyn)
         self._transfer = None     # (factorized configuration, P): the map P of the step, made once per step
 
     def _refresh(self, step: _Step, t: float):
@@ -344,8 +331,8 @@ class GeneralizedAlpha:
         r, K = self.dyn.residual_and_tangent(step.state, step.v, step.vdot, t)
         self.stats.tangent_updates += 1
         self.stats.residual_evaluations += 1
-        S = K + _mass_matrix(self.dyn) * self.params.beta_prime(self.h)
-        C = self.dyn.damping_matrix(step.state) if isinstance(self.dyn, Damped) else None
+        S = K + _mass_matrix(self.dyn, self.caps) * self.params.beta_prime(self.h)
+        C = self.caps.damped.damping_matrix(step.state) if self.caps.damped is not None else None
         if C is not None:
             S = S + self.params.gamma_prime(self.h) * C
         self.solver.factorize(S.tocsc())
@@ -363,36 +350,44 @@ class GeneralizedAlpha:
         Newton corrections only, and P enters the iteration matrix, not the residual (half of a solve's cost
         was the Kabsch fit of ``dyn.transfer`` at every iteration).
         """
-        dyn = self.dyn
-        if not (self.settings.rotate_matrix and isinstance(dyn, TransferAlongMotion)):
+        dyn = self.caps.transfer
+        if not (self.settings.rotate_matrix and dyn is not None):
             return -self.solver.solve(r)
         if self._transfer is None or self._transfer[0] is not self._factorized_at:
             self._transfer = (self._factorized_at, dyn.transfer(self._factorized_at, state))
         P = self._transfer[1]
         return -dyn.apply_transfer(self.solver.solve(dyn.apply_transfer(r, P, transpose=True)), P)
 
-    def step(self, q_n, v_n, vdot_n, a_n, t_n: float):
-        """One step from t_n; returns (_Step, iterations, residuals, corrections, refreshes) or raises."""
+    def step(self, q_n, v_n, vdot_n, a_n, t_n: float) -> StepSolution:
+        """One step from t_n; raises ``_StepFailure`` if it does not converge."""
         out = self._attempt(q_n, v_n, vdot_n, a_n, t_n, fresh=self.settings.policy == "full" or not self.solver.ready)
-        if out[0] is None and not out[-1]:   # failed with an old matrix: retry with a fresh one
+        if out.solution is None and not out.any_fresh:   # failed with an old matrix: retry with a fresh one
             out = self._attempt(q_n, v_n, vdot_n, a_n, t_n, fresh=True)
-        if out[0] is None and self.settings.policy == "modified":
+        if out.solution is None and self.settings.policy == "modified":
             # failed with matrices kept across iterations: retry with a fresh one at every iteration (Newton). A slack
             # membrane that tautens within a step changes its stiffness faster than the kept matrices follow
             # (a 10 m sail under a rim pulse: 20 iterations short of convergence at step 6, 4 with Newton)
             out = self._attempt(q_n, v_n, vdot_n, a_n, t_n, fresh=True, newton=True)
-        if out[0] is None:
+        if out.solution is None:
             self.solver = LinearSolver()  # the failed attempt's matrix belongs to a wild iterate: never reuse it
-            raise _StepFailure(out[1])
-        return out[:-1]
+            raise _StepFailure(out.message)
+        return out.solution
 
-    def _attempt(self, q_n, v_n, vdot_n, a_n, t_n: float, fresh: bool, newton: bool = False):
+    def _attempt(self, q_n, v_n, vdot_n, a_n, t_n: float, fresh: bool, newton: bool = False) -> _Attempt:
         """One try at the step: from the predictor, with a fresh matrix first if ``fresh``, and a fresh one at every
         iteration if ``newton`` (or under the "full" policy)."""
-        h, p, s, dyn = self.h, self.params, self.settings, self.dyn
+        h, p, s, dyn, caps = self.h, self.params, self.settings, self.dyn, self.caps
         t = t_n + h
         bp, gp = p.beta_prime(h), p.gamma_prime(h)
-        step = _predict(q_n, v_n, vdot_n, a_n, h, p, lambda q, x: _configuration(dyn, q, x, t))
+        step = _predict(q_n, v_n, vdot_n, a_n, h, p, lambda q, x: _configuration(dyn, caps, q, x, t))
+
+        def failed(message: str) -> _Attempt:
+            return _Attempt(None, message, any_fresh)
+
+        def converged(k: int) -> _Attempt:
+            return _Attempt(StepSolution(step.state, step.v, step.vdot, step.a, k + 1, residuals, corrections,
+                                         refreshes), "", any_fresh)
+
         self._transfer = None                     # a new P for this step (``_solve``)
         residuals, corrections, refreshes = [], [], 0
         any_fresh, need, prev = fresh, fresh, None
@@ -409,7 +404,7 @@ class GeneralizedAlpha:
                     self.stats.residual_evaluations += 1
                 dx = self._solve(step.state, r)
             except (FloatingPointError, SingularMatrixError) as exc:
-                return None, str(exc), any_fresh
+                return failed(str(exc))
             residuals.append(float(np.linalg.norm(r)))
             before = dataclasses.replace(step)
             # Newton correction of x = h dq_n, of the velocity and of the accelerations (beta', gamma')
@@ -418,16 +413,16 @@ class GeneralizedAlpha:
             step.vdot = step.vdot + bp * dx
             step.a = step.a + (1.0 - p.alpha_f) / (1.0 - p.alpha_m) * bp * dx
             try:
-                step.state = _configuration(dyn, q_n, step.x, t)   # exact: q_{n+1} = q_n o exp(h dq_n)
+                step.state = _configuration(dyn, caps, q_n, step.x, t)   # exact: q_{n+1} = q_n o exp(h dq_n)
             except FloatingPointError as exc:
-                return None, str(exc), any_fresh
+                return failed(str(exc))
             self.stats.iterations += 1
             err = weighted_rms(dx, step.x, dyn.dof_scale, s)
             corrections.append(err)
             if not np.isfinite(err):
-                return None, "non-finite correction", any_fresh
+                return failed("non-finite correction")
             if err == 0.0:
-                return step, k + 1, residuals, corrections, refreshes, any_fresh
+                return converged(k)
             if prev is not None:
                 theta = err / prev
                 if theta >= 1.0 and not used_fresh:      # an old matrix made it worse: undo, refresh, redo
@@ -437,7 +432,7 @@ class GeneralizedAlpha:
                     continue
                 if theta >= 1.0:                         # not contracting: Newton steps with fresh matrices
                     if err > s.divergence_factor * corrections[0]:
-                        return None, (f"diverging corrections {[f'{c:.2e}' for c in corrections]}"), any_fresh
+                        return failed(f"diverging corrections {[f'{c:.2e}' for c in corrections]}")
                     need, prev = True, err
                     continue
                 theta_e = max(theta, s.contraction_floor)
@@ -445,74 +440,35 @@ class GeneralizedAlpha:
                 need = theta > s.refresh_ratio
             need = need or newton or s.policy == "full"
             if eta * err <= 1.0:
-                return step, k + 1, residuals, corrections, refreshes, any_fresh
+                return converged(k)
             prev = err
-        return None, (f"no convergence in {s.max_iterations} iterations (corrections "
-                      f"{[f'{c:.2e}' for c in corrections]})"), any_fresh
+        return failed(f"no convergence in {s.max_iterations} iterations (corrections "
+                      f"{[f'{c:.2e}' for c in corrections]})")
 
 
 
-def _record(dyn, index: int, t: float, state, v: np.ndarray, iterations: int, residuals, corrections,
-            refreshes: int, substeps: int, t0: float, dissipated: float = 0.0) -> DynamicStepRecord:
-    p, L = dyn.momenta(state, v)
-    return DynamicStepRecord(index, t, iterations, list(residuals), list(corrections), refreshes, substeps,
-                             dyn.kinetic_energy(v), dyn.strain_energy(state), dyn.gravity_potential(state),
-                             p, L, time.perf_counter() - t0, dissipated)
-
-
-def _damping_force(dyn, state, v: np.ndarray) -> np.ndarray:
-    """f_d(q, v) (0 for a model without damping, :class:`~integrators.protocols.Damped`)."""
-    return dyn.damping_force(state, v) if isinstance(dyn, Damped) else np.zeros_like(v)
-
-
-def _mass_matrix(dyn) -> sp.spmatrix:
+def _mass_matrix(dyn, caps: Capabilities) -> sp.spmatrix:
     """The constant mass matrix M: ``dyn.mass_matrix()`` (sparse: lumped or consistent,
     :class:`~integrators.protocols.MassMatrix`), or diag(``dyn.mass``) (:class:`~integrators.protocols.LumpedMass`)."""
-    return dyn.mass_matrix() if isinstance(dyn, MassMatrix) else sp.diags(dyn.mass)
+    return caps.mass_matrix.mass_matrix() if caps.mass_matrix is not None else sp.diags(dyn.mass)
 
 
 class _StepFailure(RuntimeError):
     pass
 
 
-class _Bookkeeping:
-    """What the fixed-step and the adaptive loops share: the dissipated work D (module docstring), the records
-    kept and given to ``on_step``, and the hand-over of the last converged step when a ``KeyboardInterrupt``
-    stops the run between two records. Step indices count from the run's start (``first_step`` included)."""
+class _Observers:
+    """The run's observers, given every accepted step (:class:`~integrators.protocols.AcceptedStep`) in order."""
 
-    def __init__(self, dyn, on_step: Callable | None, t0: float, q, v: np.ndarray, dissipated: float,
-                 first_step: int) -> None:
-        self.dyn, self.on_step, self.t0 = dyn, on_step, t0
-        self.records: list[DynamicStepRecord] = []
-        self.dissipated = dissipated                 # D = int v . f_d dt
-        self._f_damp = _damping_force(dyn, q, v)     # f_d at the last converged step
-        self.last = first_step                       # the last step given to on_step
+    def __init__(self, observers: Sequence[StepObserver], t0: float) -> None:
+        self.observers, self.t0 = tuple(observers), t0
 
-    def accept(self, h: float, v_old: np.ndarray, q, v: np.ndarray) -> None:
-        """A converged step of h from velocity ``v_old`` to (q, v): D += h v_m . f_m (the means of the step)."""
-        f_new = _damping_force(self.dyn, q, v)
-        self.dissipated += 0.25 * h * float((v_old + v) @ (self._f_damp + f_new))
-        self._f_damp = f_new
-
-    def record(self, index: int, t: float, q, v: np.ndarray, vdot: np.ndarray, a: np.ndarray, iterations: int,
-               residuals, corrections, refreshes: int, substeps: int, **fields) -> None:
-        """Keep the record of step ``index`` (``fields``: the record's further values) and give it to on_step."""
-        rec = _record(self.dyn, index, t, q, v, iterations, residuals, corrections, refreshes, substeps, self.t0,
-                      self.dissipated)
-        rec.motion = {"v": v, "vdot": vdot, "a": a}
-        for name, value in fields.items():
-            setattr(rec, name, value)
-        self.records.append(rec)
-        self.last = index
-        if self.on_step is not None:
-            self.on_step(rec, q, v)
-
-    def interrupted(self, index: int, t: float, q, v: np.ndarray, vdot: np.ndarray, a: np.ndarray) -> None:
-        """Ctrl-C / a stop request: give on_step the last converged step (``index``) if it was not recorded."""
-        if self.on_step is not None and index > self.last:
-            rec = _record(self.dyn, index, t, q, v, 0, [], [], 0, 1, self.t0, self.dissipated)
-            rec.motion = {"v": v, "vdot": vdot, "a": a}
-            self.on_step(rec, q, v)
+    def __call__(self, **fields) -> None:
+        if not self.observers:
+            return
+        step = AcceptedStep(**fields, wall_time=time.perf_counter() - self.t0)
+        for observer in self.observers:
+            observer(step)
 
 
 class _Stepper:
@@ -536,8 +492,9 @@ class _Stepper:
     def advance(self, q, v, vdot, a, t: float, level: int = 0) -> StepTaken:
         """A step of h / 2^level from t, cut back into two halves (recursively) when it fails."""
         try:
-            st, its, res, cor, ref = self._integrator(level).step(q, v, vdot, a, t)
-            return StepTaken(st.state, st.v, st.vdot, st.a, its, res, cor, ref, 1, 0, self.h / 2**level)
+            st = self._integrator(level).step(q, v, vdot, a, t)
+            return StepTaken(st.state, st.v, st.vdot, st.a, iterations=st.iterations, residuals=st.residuals,
+                             corrections=st.corrections, refreshes=st.refreshes, h=self.h / 2**level)
         except _StepFailure:
             if level >= self.settings.max_cutbacks:
                 raise
@@ -616,13 +573,11 @@ class _AdaptiveStepper:
         return j
 
 
-def _adaptive_run(dyn, stepper: _AdaptiveStepper, t_start: float, t_end: float, q, v, vdot, a, on_step,
-                  t0: float, initial: DynamicStepRecord, first_step: int = 0,
-                  dissipated: float = 0.0) -> DynamicResult:
-    """The loop of :func:`generalized_alpha` with error-controlled steps (module docstring); ``first_step``
-    and ``dissipated``: the step count and the dissipated work D at t_start (a restart)."""
-    s, p = stepper.settings, stepper.params
-    book = _Bookkeeping(dyn, on_step, t0, q, v, dissipated, first_step)
+def _adaptive_run(stepper: _AdaptiveStepper, t_start: float, t_end: float, q, v, vdot, a, observe: _Observers,
+                  t0: float, first_step: int = 0) -> DynamicResult:
+    """The loop of :func:`generalized_alpha` with error-controlled steps (module docstring); ``first_step``: the
+    step count at t_start (a restart)."""
+    s, p, scale = stepper.settings, stepper.params, stepper.dyn.dof_scale
     pos, accepted, rej_err, rej_newton = 0, 0, 0, 0     # totals
     since = [0, 0, 0]                                    # accepted, rejected (error, Newton) since the last record
     wanted, grow = stepper.h(max(stepper.j_min, 0)), True
@@ -630,61 +585,61 @@ def _adaptive_run(dyn, stepper: _AdaptiveStepper, t_start: float, t_end: float, 
     t = t_start
 
     def result(converged: bool, message: str) -> DynamicResult:
-        return DynamicResult(q, v, vdot, a, t, book.records, stepper.stats, initial, converged, message,
-                             time.perf_counter() - t0, book.dissipated, accepted, rej_err, rej_newton,
-                             min(h_taken, default=float("nan")), max(h_taken, default=float("nan")), True)
+        return DynamicResult(q, v, vdot, a, t, stepper.stats, converged, message, time.perf_counter() - t0,
+                             steps=accepted, rejected_error=rej_err, rejected_newton=rej_newton,
+                             min_step=min(h_taken, default=float("nan")), max_step=max(h_taken, default=float("nan")),
+                             adaptive=True)
 
-    try:
-        while pos < stepper.end:
-            j = stepper.rung(pos, wanted)
-            if j > stepper.j_max:
-                return result(False, f"step {accepted + 1} from t = {t:.6g} failed: the step size needed is below "
-                                     f"min_step {stepper.h(stepper.j_max):.3g} s ({rej_err} steps rejected by the "
-                                     f"error estimate, {rej_newton} by Newton failures)")
-            h = stepper.h(j)
-            a_n = shifted_pseudo_acceleration(a, a_prev, h_prev, h, p)
-            try:
-                st, its, res, cor, ref = stepper.integrator(j).step(q, v, vdot, a_n, t)
-            except _StepFailure as exc:
-                rej_newton, since[2] = rej_newton + 1, since[2] + 1
-                if j >= stepper.j_max:
-                    return result(False, f"step {accepted + 1} from t = {t:.6g} failed at the smallest step "
-                                         f"{h:.3g} s: {exc}")
-                wanted, grow = 0.5 * h, False
-                continue
-            err = error_norm(local_error_estimate(st.a, a_n, h, p), dyn.dof_scale, s)
-            factor = s.safety * err ** (-1.0 / 3.0) if err > 0 else np.inf
-            if not np.isfinite(err) or err > 1.0:
-                rej_err, since[1] = rej_err + 1, since[1] + 1
-                wanted, grow = h * min(0.5, max(0.1, factor if np.isfinite(err) else 0.1)), False
-                continue
-            # accepted: q_{n+1}, v_{n+1}, vdot_{n+1}, a_{n+1}
-            v_old = v
-            q, v, vdot, a_prev, a = st.state, st.v, st.vdot, a_n, st.a
-            h_prev = h
-            h_taken.append(h)
-            pos += stepper.ticks(j)
-            t = t_end if pos == stepper.end else t_start + pos / 2**stepper.j_max * stepper.base
-            accepted += 1
-            since[0] += 1
-            wanted = h * min(2.0 if grow else 1.0, factor)
-            grow = True
-            book.accept(h, v_old, q, v)
-            if pos % stepper.out == 0 or pos == stepper.end:
-                counts, since = since, [0, 0, 0]
-                book.record(first_step + accepted, t, q, v, vdot, a, its, res, cor, ref, counts[0], h=h,
-                            rejected_error=counts[1], rejected_newton=counts[2], error_estimate=err)
-    except KeyboardInterrupt:  # Ctrl-C / a stop request: hand the last converged step over, then stop
-        book.interrupted(first_step + accepted, t, q, v, vdot, a)
-        raise
+    while pos < stepper.end:
+        j = stepper.rung(pos, wanted)
+        if j > stepper.j_max:
+            return result(False, f"step {accepted + 1} from t = {t:.6g} failed: the step size needed is below "
+                                 f"min_step {stepper.h(stepper.j_max):.3g} s ({rej_err} steps rejected by the "
+                                 f"error estimate, {rej_newton} by Newton failures)")
+        h = stepper.h(j)
+        a_n = shifted_pseudo_acceleration(a, a_prev, h_prev, h, p)
+        try:
+            st = stepper.integrator(j).step(q, v, vdot, a_n, t)
+        except _StepFailure as exc:
+            rej_newton, since[2] = rej_newton + 1, since[2] + 1
+            if j >= stepper.j_max:
+                return result(False, f"step {accepted + 1} from t = {t:.6g} failed at the smallest step "
+                                     f"{h:.3g} s: {exc}")
+            wanted, grow = 0.5 * h, False
+            continue
+        err = error_norm(local_error_estimate(st.a, a_n, h, p), scale, s)
+        factor = s.safety * err ** (-1.0 / 3.0) if err > 0 else np.inf
+        if not np.isfinite(err) or err > 1.0:
+            rej_err, since[1] = rej_err + 1, since[1] + 1
+            wanted, grow = h * min(0.5, max(0.1, factor if np.isfinite(err) else 0.1)), False
+            continue
+        # accepted: q_{n+1}, v_{n+1}, vdot_{n+1}, a_{n+1}
+        v_old = v
+        q, v, vdot, a_prev, a = st.state, st.v, st.vdot, a_n, st.a
+        h_prev = h
+        h_taken.append(h)
+        pos += stepper.ticks(j)
+        t = t_end if pos == stepper.end else t_start + pos / 2**stepper.j_max * stepper.base
+        accepted += 1
+        since[0] += 1
+        wanted = h * min(2.0 if grow else 1.0, factor)
+        grow = True
+        output = pos % stepper.out == 0 or pos == stepper.end
+        counts = since
+        if output:
+            since = [0, 0, 0]
+        observe(index=first_step + accepted, time=t, step_size=h, state=q, previous_velocity=v_old, velocity=v,
+                acceleration=vdot, pseudo_acceleration=a, iterations=st.iterations, residuals=tuple(st.residuals),
+                corrections=tuple(st.corrections), refreshes=st.refreshes, substeps=counts[0],
+                rejected_error=counts[1], rejected_newton=counts[2], h=h, error_estimate=err, output=output)
     return result(True, "completed")
 
 
 def generalized_alpha(dyn: DynamicProblem, t_end: float, h: float, *, state=None, velocity: np.ndarray | None = None,
                       settings: AlphaSettings | None = None, t_start: float = 0.0,
-                      on_step: Callable | None = None, record_every: int = 1,
+                      observers: Sequence[StepObserver] = (), record_every: int = 1,
                       acceleration: np.ndarray | None = None, pseudo_acceleration: np.ndarray | None = None,
-                      first_step: int = 0, dissipated_energy: float = 0.0) -> DynamicResult:
+                      first_step: int = 0) -> DynamicResult:
     """Integrate from t_start to t_end with a fixed step (h, rounded down so that whole steps end at t_end) or,
     with ``settings.adaptive``, error-controlled steps.
 
@@ -697,23 +652,25 @@ def generalized_alpha(dyn: DynamicProblem, t_end: float, h: float, *, state=None
         down as the fixed step is)
     state, velocity : initial configuration (default: the reference ``dyn.model.initial_state()``,
         :class:`~integrators.protocols.WrapsStaticProblem`) and free-DoF velocity (default: 0)
-    on_step : called as on_step(record, state, v) after every recorded step, and for the last converged
-        step when a ``KeyboardInterrupt`` stops the run between two recorded steps (then re-raised)
-    record_every : keep every k-th step record (energy and momenta are evaluated only for kept steps);
-        adaptive: a record at every multiple of k H after t_start (the same times as the fixed step's records),
+    observers : :class:`~integrators.protocols.StepObserver` s, each called with the start
+        (:class:`~integrators.protocols.AcceptedStep` with ``initial``) and then with every accepted step, in
+        order; what they raise (a ``KeyboardInterrupt`` too) ends the run there
+    record_every : mark every k-th step as an output step (``AcceptedStep.output``; the last step is one too);
+        adaptive: an output step at every multiple of k H after t_start (the same times as the fixed step's),
         on which the steps land; no step is longer than k H (nor than ``settings.max_step``)
-    acceleration, pseudo_acceleration, first_step, dissipated_energy : a continuation (restart) of a run at
-        its step ``first_step``: vdot and a there (default: consistent, a = vdot), the step numbers and the
-        record_every grid counted on from it, and the work D dissipated until then
+    acceleration, pseudo_acceleration, first_step : a continuation (restart) of a run at its step
+        ``first_step``: vdot and a there (default: consistent, a = vdot), the step numbers and the
+        record_every grid counted on from it
 
     The initial acceleration is consistent (vdot_0 = -M^-1 g(q_0, t_0) from ``dyn.initial_acceleration``, a
     sparse solve for a consistent mass; a_0 = vdot_0), which the second
     order of the method requires (BCA; Arnold & Bruls 2007). Fixed step: a step that does not converge is
-    retried as two half steps, down to ``settings.max_cutbacks`` levels (default 0); a step's record then
-    sums the sub-steps' iterations and histories (``substeps`` > 1, ``rejected_newton`` the failed tries).
-    Adaptive: steps H / 2^j chosen by the local error estimate (module docstring); a record sums the steps
-    since the previous one (``substeps`` accepted, ``rejected_error``, ``rejected_newton``; ``h`` the last).
-    If a step still fails, the run ends with a message and the last converged state, never with garbage.
+    retried as two half steps, down to ``settings.max_cutbacks`` levels (default 0); its accepted step then
+    sums the sub-steps' iterations and histories (``substeps`` > 1, ``rejected_newton`` the failed tries since
+    the previous output step). Adaptive: steps H / 2^j chosen by the local error estimate (module docstring);
+    an accepted step counts the steps since the previous output step (``substeps`` accepted,
+    ``rejected_error``, ``rejected_newton``). If a step still fails, the run ends with a message and the last
+    converged state, never with garbage.
     """
     if not (np.isfinite(t_end) and t_end > t_start):
         raise ValueError(f"t_end must be finite and > t_start, got {t_end!r}")
@@ -723,47 +680,47 @@ def generalized_alpha(dyn: DynamicProblem, t_end: float, h: float, *, state=None
     n_steps = max(1, int(np.ceil((t_end - t_start) / h - 1e-9)))
     h = (t_end - t_start) / n_steps
     require(dyn, DynamicProblem, "the dynamic problem")
-    if state is None and not isinstance(dyn, WrapsStaticProblem):
+    caps = capabilities(dyn)
+    if state is None and caps.static_model is None:
         raise ValueError(f"the dynamic problem {type(dyn).__name__} has no static model to start from: give state")
-    q = dyn.model.initial_state() if state is None else state
-    if isinstance(dyn, Prescribed):
-        q = dyn.prescribe(q, t_start)
+    q = caps.static_model.initial_state() if state is None else state
+    if caps.prescribed is not None:
+        q = caps.prescribed.prescribe(q, t_start)
     v = np.zeros(dyn.n_dof) if velocity is None else np.asarray(velocity, float).copy()
     vdot = dyn.initial_acceleration(q, t_start, v) if acceleration is None else np.asarray(acceleration, float).copy()
     a = vdot.copy() if pseudo_acceleration is None else np.asarray(pseudo_acceleration, float).copy()
     t0 = time.perf_counter()
-    initial = _record(dyn, first_step, t_start, q, v, 0, [], [], 0, 1, t0, dissipated_energy)
+    observe = _Observers(observers, t0)
+    observe(index=first_step, time=t_start, step_size=0.0, state=q, previous_velocity=v, velocity=v,
+            acceleration=vdot, pseudo_acceleration=a, initial=True)
     if settings.adaptive:
         stepper = _AdaptiveStepper(dyn, h, n_steps, int(record_every), settings)
-        return _adaptive_run(dyn, stepper, t_start, t_end, q, v, vdot, a, on_step, t0, initial,
-                             first_step, float(dissipated_energy))
+        return _adaptive_run(stepper, t_start, t_end, q, v, vdot, a, observe, t0, first_step)
     stepper = _Stepper(dyn, h, settings)
-    book = _Bookkeeping(dyn, on_step, t0, q, v, float(dissipated_energy), first_step)
     substeps, failures, failed_since = 0, 0, 0
-    t, done = t_start, 0  # (q, v) after `done` steps at t
+    t = t_start
 
     def result(converged: bool, message: str) -> DynamicResult:
-        return DynamicResult(q, v, vdot, a, t, book.records, stepper.stats, initial, converged, message,
-                             time.perf_counter() - t0, book.dissipated, substeps, 0, failures,
-                             h / 2 ** max(stepper._levels, default=0), h, False)
+        return DynamicResult(q, v, vdot, a, t, stepper.stats, converged, message, time.perf_counter() - t0,
+                             steps=substeps, rejected_newton=failures,
+                             min_step=h / 2 ** max(stepper._levels, default=0), max_step=h, adaptive=False)
 
-    try:
-        for n in range(n_steps):
-            try:
-                v_old = v
-                step = stepper.advance(q, v, vdot, a, t)
-            except _StepFailure as exc:
-                return result(False, f"step {n + 1} from t = {t:.6g} failed: {exc}")
-            q, v, vdot, a = step.state, step.v, step.vdot, step.a
-            t, done = t_start + (n + 1) * h, n + 1  # no call since advance(): an interrupt cannot fall between
-            substeps, failures = substeps + step.substeps, failures + step.failures
-            failed_since += step.failures
-            book.accept(h, v_old, q, v)
-            if (first_step + n + 1) % record_every == 0 or n + 1 == n_steps:
-                failed, failed_since = failed_since, 0
-                book.record(first_step + n + 1, t, q, v, vdot, a, step.iterations, step.residuals, step.corrections,
-                            step.refreshes, step.substeps, h=step.h, rejected_newton=failed)
-    except KeyboardInterrupt:  # Ctrl-C / a stop request: hand the last converged step over, then stop
-        book.interrupted(first_step + done, t, q, v, vdot, a)
-        raise
+    for n in range(n_steps):
+        try:
+            v_old = v
+            step = stepper.advance(q, v, vdot, a, t)
+        except _StepFailure as exc:
+            return result(False, f"step {n + 1} from t = {t:.6g} failed: {exc}")
+        q, v, vdot, a = step.state, step.v, step.vdot, step.a
+        t = t_start + (n + 1) * h
+        substeps, failures = substeps + step.substeps, failures + step.failures
+        failed_since += step.failures
+        output = (first_step + n + 1) % record_every == 0 or n + 1 == n_steps
+        failed = failed_since
+        if output:
+            failed_since = 0
+        observe(index=first_step + n + 1, time=t, step_size=h, state=q, previous_velocity=v_old, velocity=v,
+                acceleration=vdot, pseudo_acceleration=a, iterations=step.iterations,
+                residuals=tuple(step.residuals), corrections=tuple(step.corrections), refreshes=step.refreshes,
+                substeps=step.substeps, rejected_newton=failed, h=step.h, output=output)
     return result(True, "completed")

@@ -205,9 +205,10 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
             outcome.reason = str(exc)
             return state, outcome
         if settings.line_search:
-            state, r_new, a = _line_search(state, dq, r, residual, update, conjugate, settings, stats)
+            searched = _line_search(state, dq, r, residual, update, conjugate, settings, stats)
         else:
-            state, r_new, a = update(state, dq), None, 1.0
+            searched = _Searched(update(state, dq), None, 1.0)
+        state, r_new, a = searched.state, searched.residual, searched.step
         stats.iterations += 1
         outcome.iterations = it + 1
         outcome.increment = a * dq if outcome.increment is None else outcome.increment + a * dq
@@ -261,7 +262,18 @@ def newton_solve(state, residual: Callable, residual_and_tangent: Callable, upda
     return state, outcome
 
 
-def _line_search(state, dq, r0, residual, update, conjugate, settings: NewtonSettings, stats: NewtonStats):
+@dataclass(frozen=True)
+class _Searched:
+    """The end of a line search: the new state q o exp(a dq), its residual (None if not evaluated or not finite
+    enough to use) and the step a."""
+
+    state: object
+    residual: np.ndarray | None
+    step: float
+
+
+def _line_search(state, dq, r0, residual, update, conjugate, settings: NewtonSettings,
+                 stats: NewtonStats) -> _Searched:
     """Secant line search on s(a) = w . r(q o exp(a dq)); returns the new state, its residual and a."""
     w = dq if conjugate is None else conjugate(state, dq)
     s0 = float(w @ r0)
@@ -276,7 +288,7 @@ def _line_search(state, dq, r0, residual, update, conjugate, settings: NewtonSet
     else:
         s1 = float(w @ r1)
     if s0 >= 0 or abs(s1) <= settings.line_search_ratio * abs(s0):
-        return trial, r1, 1.0
+        return _Searched(trial, r1, 1.0)
     a_lo, s_lo, a_hi, s_hi = 0.0, s0, 1.0, s1
     best = (abs(s1), 1.0, trial, r1)
     for _ in range(settings.line_search_max):
@@ -295,9 +307,9 @@ def _line_search(state, dq, r0, residual, update, conjugate, settings: NewtonSet
         if abs(sa) < best[0]:
             best = (abs(sa), a, trial, ra)
         if abs(sa) <= settings.line_search_ratio * abs(s0):
-            return trial, ra, a
+            return _Searched(trial, ra, a)
         if sa < 0:
             a_lo, s_lo = a, sa
         else:
             a_hi, s_hi = a, sa
-    return best[2], best[3], best[1]
+    return _Searched(best[2], best[3], best[1])

@@ -6,14 +6,18 @@ Two problem protocols are required, one per kind of solve:
 - :class:`StaticProblem`: what :func:`integrators.static.load_control` and :func:`integrators.static.arc_length`
   call (the residual r(q, lam) = f_int(q) - lam f_ext(q), its tangent, the group update, ...);
 - :class:`DynamicProblem`: what :func:`integrators.generalized_alpha.generalized_alpha` calls (the residual
-  r(q, v, vdot, t) of M vdot + g(q, v, t) = 0, its tangent, the consistent start, the recorded energies and
-  momenta), with the mass as :class:`MassMatrix` or :class:`LumpedMass`.
+  r(q, v, vdot, t) of M vdot + g(q, v, t) = 0, its tangent, the consistent start), with the mass as
+  :class:`MassMatrix` or :class:`LumpedMass`.
 
-and small opt-in capabilities, each checked with ``isinstance`` where the integrator can use it:
-:class:`MixedIteration`, :class:`SupportCheck`, :class:`ConjugateMatrix` (static); :class:`Damped`,
-:class:`Prescribed`, :class:`TransferAlongMotion`, :class:`WrapsStaticProblem` (dynamic); and the state
-protocol :class:`StressedState`. A capability is absent when one of its members is missing; the integrator
-then does without it (documented on each).
+and small opt-in capabilities: :class:`MixedIteration`, :class:`SupportCheck`, :class:`ConjugateMatrix` (static);
+:class:`Damped`, :class:`Prescribed`, :class:`TransferAlongMotion`, :class:`WrapsStaticProblem` (dynamic);
+and the state protocol :class:`StressedState`. A capability is absent when one of its members is missing; the
+integrator then does without it (documented on each). :func:`capabilities` is the one place where a problem's
+capabilities are checked (``isinstance``), once per run.
+
+What a run produces besides its end state is observed from outside: the dynamic integrator gives every
+accepted step to its :class:`StepObserver` s as an :class:`AcceptedStep` (energies, momenta and the work of
+damping forces are the model's business, e.g. :class:`flexbody.energy.EnergyAccount`).
 
 Conventions: n is the number of free DoFs; ``State`` is whatever the model uses for a configuration (the
 integrators only pass it back to the model); a DoF vector is a float array (n,); a tangent is a scipy sparse
@@ -26,6 +30,7 @@ members a model lacks.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -147,22 +152,6 @@ class DynamicProblem(Protocol):
         """vdot_0 = -M^-1 g(q_0, v_0, t_0), (n,): the consistent start of the second-order scheme."""
         ...
 
-    def kinetic_energy(self, v: np.ndarray) -> float:
-        """T = v . M v / 2 (J), recorded."""
-        ...
-
-    def strain_energy(self, state: State) -> float:
-        """W (J), recorded."""
-        ...
-
-    def gravity_potential(self, state: State) -> float:
-        """V_g (J), the potential of gravity, recorded (0 without gravity)."""
-        ...
-
-    def momenta(self, state: State, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(p (3,), L (3,)): linear (kg m/s) and angular (kg m^2/s) momentum, recorded."""
-        ...
-
 
 @runtime_checkable
 class MassMatrix(Protocol):
@@ -183,11 +172,8 @@ class LumpedMass(Protocol):
 
 @runtime_checkable
 class Damped(Protocol):
-    """Opt-in: velocity-dependent damping forces (without them: none, no dissipated work)."""
-
-    def damping_force(self, state: State, v: np.ndarray) -> np.ndarray:
-        """f_d(q, v) (n,): the damping part of g; the dissipated work D accumulates v . f_d."""
-        ...
+    """Opt-in: velocity-dependent damping forces in g, whose velocity derivative enters the iteration matrix
+    (without it: none). The work they dissipate is the model's to account for (a :class:`StepObserver`)."""
 
     def damping_matrix(self, state: State) -> sp.spmatrix | None:
         """C_t (n, n) sparse, the velocity derivative of f_d (in the iteration matrix only), or None."""
@@ -223,6 +209,76 @@ class WrapsStaticProblem(Protocol):
     """Opt-in: a dynamic problem built on a static model, whose reference configuration is the default start."""
 
     model: StaticProblem
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """The opt-in capabilities of a problem, resolved once (:func:`capabilities`): each is the problem itself
+    when it has the capability, else None (the integrator then does without it, as documented on each)."""
+
+    mixed_iteration: MixedIteration | None = None
+    support_check: SupportCheck | None = None
+    conjugate_matrix: ConjugateMatrix | None = None
+    mass_matrix: MassMatrix | None = None
+    damped: Damped | None = None
+    prescribed: Prescribed | None = None
+    transfer: TransferAlongMotion | None = None
+    static_model: StaticProblem | None = None
+
+
+def capabilities(problem: object) -> Capabilities:
+    """The opt-in capabilities of ``problem`` (static or dynamic): the one place where the integrators check
+    them, with ``isinstance`` on the ``runtime_checkable`` protocols above."""
+    def having(protocol: type):
+        return problem if isinstance(problem, protocol) else None
+
+    return Capabilities(mixed_iteration=having(MixedIteration), support_check=having(SupportCheck),
+                        conjugate_matrix=having(ConjugateMatrix), mass_matrix=having(MassMatrix),
+                        damped=having(Damped), prescribed=having(Prescribed), transfer=having(TransferAlongMotion),
+                        static_model=problem.model if isinstance(problem, WrapsStaticProblem) else None)
+
+
+@dataclass(frozen=True)
+class AcceptedStep:
+    """A time step accepted by :func:`integrators.generalized_alpha.generalized_alpha`, as the integrator has it,
+    given to every :class:`StepObserver` (the start of the run too, as ``initial``).
+
+    Vectors are on the free DoFs (n,); the arrays are the integrator's own: an observer must not change them.
+    Counts (``substeps``, ``rejected_*``) are those of the output record this step would make: with fixed steps
+    the sub-steps of this step after cut-backs, and the failed tries since the previous output step; with
+    adaptive steps the accepted steps and the rejections since the previous output step (this one included).
+    """
+
+    index: int                        # the step number from the run's start (a restart's ``first_step`` counted)
+    time: float                       # t_{n+1} (s)
+    step_size: float                  # t_{n+1} - t_n as taken (sub-steps included); 0 for the initial state
+    state: State                      # q_{n+1}
+    previous_velocity: np.ndarray     # v_n, at the start of the step
+    velocity: np.ndarray              # v_{n+1}
+    acceleration: np.ndarray          # vdot_{n+1}
+    pseudo_acceleration: np.ndarray   # a_{n+1}
+    iterations: int = 0               # Newton iterations (of the last accepted step; its sub-steps summed)
+    residuals: tuple[float, ...] = ()     # ||r|| at each iterate
+    corrections: tuple[float, ...] = ()   # the weighted RMS norm of each correction
+    refreshes: int = 0                # iteration-matrix refreshes (each a factorization)
+    substeps: int = 1
+    rejected_error: int = 0           # steps rejected by the error estimate (adaptive)
+    rejected_newton: int = 0          # tries whose Newton iteration failed
+    h: float = 0.0                    # the size of the last (sub-)step taken (s); 0 for the initial state
+    error_estimate: float = float("nan")  # the weighted local error estimate of the step (adaptive; <= 1)
+    output: bool = False              # an output step (every ``record_every``-th, and the last)
+    initial: bool = False             # the start of the run (no step taken)
+    wall_time: float = 0.0            # seconds since the integrator started
+
+
+@runtime_checkable
+class StepObserver(Protocol):
+    """Called with every :class:`AcceptedStep` of a run, the initial state first, in order. What the integrator
+    does not need (energies, momenta, dissipated work, output files) is computed by observers. An exception
+    raised by an observer (a ``KeyboardInterrupt`` too) ends the run there."""
+
+    def __call__(self, step: AcceptedStep) -> None:
+        ...
 
 
 def members(protocol: type) -> list[str]:

@@ -22,8 +22,7 @@ import numpy as np
 
 from integrators.linear import LinearSolver, SingularMatrixError, inertia
 from integrators.newton import NewtonSettings, NewtonStats, newton_solve, work_norm
-from integrators.protocols import (ConjugateMatrix, MixedIteration, StaticProblem, StressedState, SupportCheck,
-                                   require)
+from integrators.protocols import StaticProblem, StressedState, capabilities, require
 
 
 @dataclass
@@ -157,8 +156,9 @@ def _check_support(model: StaticProblem) -> None:
     what it lacks), and a static run needs every rigid-body motion restrained (else the stiffness is
     singular): models that can tell (:class:`SupportCheck`) are asked."""
     require(model, StaticProblem, "the static problem")
-    if isinstance(model, SupportCheck):
-        model.check_static_support()
+    check = capabilities(model).support_check
+    if check is not None:
+        check.check_static_support()
 
 
 def _history(residuals) -> list[str]:
@@ -180,8 +180,10 @@ def _mixed(model, settings: NewtonSettings) -> bool:
     displacement iteration: on a factorization kept from older iterates the mixed iteration converges worse
     than the displacement one (refresh ratio 0.5: hemisphere 104 factorizations against 77, end moment 1102
     against 139; docs/performance.md), on fresh ones far better (hemisphere 47)."""
-    return settings.mixed and settings.policy == "full" and isinstance(model, MixedIteration) \
-        and model.supports_mixed_iteration
+    if not (settings.mixed and settings.policy == "full"):
+        return False
+    mixed = capabilities(model).mixed_iteration
+    return mixed is not None and bool(mixed.supports_mixed_iteration)
 
 
 def _with_stresses(model, state, settings: NewtonSettings):
@@ -291,8 +293,9 @@ def stability_matrix(model, state, lam: float):
         state = dataclasses.replace(state, stress=None)
     _, K = model.residual_and_tangent(state, lam)
     f = model.external_force(state)
-    if isinstance(model, ConjugateMatrix):
-        T = model.conjugate_matrix(state)
+    conjugate = capabilities(model).conjugate_matrix
+    if conjugate is not None:
+        T = conjugate.conjugate_matrix(state)
         K, f = T.T @ K, T.T @ f
     return (0.5 * (K + K.T)).tocsc(), f
 

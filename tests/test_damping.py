@@ -10,6 +10,7 @@ from flexbody.assembly import Model
 from flexbody.body import ShellBody
 from flexbody.constraints import Fix
 from flexbody.dynamics import DynamicModel, RayleighDamping
+from flexbody.energy import integrate_motion
 from flexbody.mesh import generators
 from flexbody.shell.material import ShellMaterial
 from flexbody.shell.variants import MITC7
@@ -116,11 +117,11 @@ def free_vibration(damping: RayleighDamping | None, periods: float = 6.0, per_pe
     tip = dyn.model.body.mesh.node_set("tip")
     hist = []
     T = 2 * np.pi / omega
-    out = generalized_alpha(dyn, periods * T, T / per_period, state=q0, velocity=v0,
-                            settings=AlphaSettings(rho_inf=1.0, rtol=1e-10, atol=1e-12),
-                            on_step=lambda rec, q, v: hist.append((rec.time, q.x[tip, 2].mean())))
-    assert out.converged, out.message
-    return omega, np.array(hist), out
+    run = integrate_motion(dyn, periods * T, T / per_period, state=q0, velocity=v0,
+                           settings=AlphaSettings(rho_inf=1.0, rtol=1e-10, atol=1e-12),
+                           on_step=lambda rec, q, v: hist.append((rec.time, q.x[tip, 2].mean())))
+    assert run.result.converged, run.result.message
+    return omega, np.array(hist), run
 
 
 def peaks(hist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -165,13 +166,13 @@ def test_energy_balance_with_dissipated_work():
     omega = first_mode(cantilever(None))[0]
     f1 = omega / (2 * np.pi)
     for per_period in (30, 60):
-        _, _, out = free_vibration(RayleighDamping.from_ratio(0.05, (f1, 4 * f1)), 4.0, per_period)
-        recs = [out.initial, *out.records]
+        _, _, run = free_vibration(RayleighDamping.from_ratio(0.05, (f1, 4 * f1)), 4.0, per_period)
+        recs = [run.initial, *run.records]
         E0 = recs[0].total_energy
         mech = np.array([r.total_energy for r in recs])
         balance = np.array([r.energy_balance for r in recs])
         assert mech[-1] < 0.3 * E0                            # exp(-2 zeta omega t): 0.08 after 4 periods
-        assert out.dissipated_energy == pytest.approx(recs[-1].dissipated_energy)
+        assert run.dissipated_energy == recs[-1].dissipated_energy
         assert np.abs(balance - E0).max() < 1e-6 * E0
 
 
@@ -192,9 +193,9 @@ def test_dissipated_work_of_an_overdamped_body_stays_bounded():
     (its first mode's ratio 0.5, the others far above 1): the balance holds to 3.4e-6 of |V_g|; the trapezoid of
     the power v . f_d gave 2.8e-4."""
     dyn = DynamicModel(cantilever(None).model, gravity=(0.0, 0.0, -0.1), damping=RayleighDamping(0.0, 1.0))
-    out = generalized_alpha(dyn, 0.3, 0.01, settings=AlphaSettings(rho_inf=1.0))
-    assert out.converged, out.message
-    recs = [out.initial, *out.records]
+    run = integrate_motion(dyn, 0.3, 0.01, settings=AlphaSettings(rho_inf=1.0))
+    assert run.result.converged, run.result.message
+    recs = [run.initial, *run.records]
     scale = max(abs(r.potential_energy) for r in recs)
     balance = np.array([r.energy_balance for r in recs])
     assert scale > 0 and np.abs(balance - balance[0]).max() < 2e-5 * scale
@@ -212,9 +213,9 @@ def kicked_spin(damping: RayleighDamping | None, revolutions: float = 0.5, steps
     v_kick = dyn.consistent_director_rates(q, dyn.velocity_from_nodal(q, kick, np.zeros_like(kick)))
     v0 = spin.velocity + v_kick
     t_end = revolutions * 2 * np.pi / 20.0
-    out = generalized_alpha(dyn, t_end, t_end / steps, state=q, velocity=v0, settings=AlphaSettings(rho_inf=1.0))
-    assert out.converged, out.message
-    return dyn, out, dyn.kinetic_energy(v_kick)
+    run = integrate_motion(dyn, t_end, t_end / steps, state=q, velocity=v0, settings=AlphaSettings(rho_inf=1.0))
+    assert run.result.converged, run.result.message
+    return dyn, run, dyn.kinetic_energy(v_kick)
 
 
 def test_consistent_director_rates():
@@ -235,18 +236,18 @@ def test_consistent_director_rates():
 def test_spinning_plate_keeps_its_angular_momentum_under_stiffness_damping():
     """a1 > 0 damps the kicked vibration but not the spin: the angular momentum is conserved (drift < 1e-6)
     and the energy balance holds; a0 > 0 damps the rigid spin itself (L decays like exp(-a0 t))."""
-    dyn, out, kick_energy = kicked_spin(RayleighDamping(0.0, 1e-3))
-    recs = [out.initial, *out.records]
+    dyn, run, kick_energy = kicked_spin(RayleighDamping(0.0, 1e-3))
+    recs = [run.initial, *run.records]
     L = np.array([r.angular_momentum for r in recs])
     assert np.linalg.norm(L - L[0], axis=1).max() < 1e-6 * np.linalg.norm(L[0])
-    assert out.dissipated_energy > 0.01 * kick_energy            # it damped the vibration (measured 3.8 %)
+    assert run.dissipated_energy > 0.01 * kick_energy            # it damped the vibration (measured 3.8 %)
     balance = np.array([r.energy_balance for r in recs])
     assert np.abs(balance - balance[0]).max() < 2e-6 * balance[0]
 
     a0 = 0.5
-    dyn, out, _ = kicked_spin(RayleighDamping(a0, 0.0))
-    L0, L1 = out.initial.angular_momentum, out.records[-1].angular_momentum
-    assert L1[2] / L0[2] == pytest.approx(np.exp(-a0 * out.time), rel=1e-3)
+    dyn, run, _ = kicked_spin(RayleighDamping(a0, 0.0))
+    L0, L1 = run.initial.angular_momentum, run.records[-1].angular_momentum
+    assert L1[2] / L0[2] == pytest.approx(np.exp(-a0 * run.result.time), rel=1e-3)
 
 
 # -- scenes: TOML [analysis.damping], the energy balance of a run, bad input ----------------------------------

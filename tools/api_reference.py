@@ -23,7 +23,8 @@ import warnings
 
 ROOT = Path(__file__).resolve().parents[1]
 #: modules rendered next to ``flexbody`` (their pages are the targets of the docstrings' references)
-EXTRA_MODULES = ("flexbody.scenes", "integrators.static", "integrators.generalized_alpha", "integrators.newton")
+EXTRA_MODULES = ("flexbody.scenes", "flexbody.energy", "integrators.static", "integrators.generalized_alpha",
+                 "integrators.newton", "integrators.protocols")
 #: a role reference (``:func:`name```) or a backticked dotted name of the package (```flexbody.x.y```)
 _ROLE = re.compile(r":(?:py:)?(?:mod|func|data|const|class|meth|attr|exc|obj):`~?([^`<>]+?)`")
 _DOTTED = re.compile(r"(?<![:\w])``?((?:flexbody|integrators)(?:\.\w+)+)(?:\(\))?``?")

@@ -103,19 +103,9 @@ def _output_value(out, model, dyn, state, velocity: np.ndarray) -> float:
     return out.value(model, state)
 
 
-def _state_record(dyn, step: int, t: float, state, velocity: np.ndarray, wall_time: float,
-                  dissipated: float = 0.0):
-    """A step record of a state without solver statistics (the initial state; the last converged state of a
-    run that stopped between two output steps): 0 iterations, energies and momenta evaluated here."""
-    from integrators.generalized_alpha import DynamicStepRecord
-    p, L = dyn.momenta(state, velocity)
-    return DynamicStepRecord(step, t, 0, [], [], 0, 1, dyn.kinetic_energy(velocity), dyn.strain_energy(state),
-                             dyn.gravity_potential(state), p, L, wall_time, dissipated)
-
-
 def _steps_taken(result, a: DynamicAnalysis) -> int:
     """The number of time steps behind ``result.time`` (the fixed steps end on a grid; adaptive: counted)."""
-    if getattr(result, "adaptive", False):
+    if result.adaptive:
         return int(result.steps)
     return int(round(result.time / (a.end_time / a.n_steps)))
 
@@ -150,6 +140,7 @@ class DynamicRun:
                                                           "angular_momentum")}
         self.h = a.end_time / a.n_steps
         self.turn = (0.0, 0.0)                   # the largest rotation per step so far, and its time
+        self.records: list = []                  # the step records after the start
 
     def record(self, rec, q, v, initial: bool = False) -> None:
         """Record a step: the nodal velocity fields for the output files, outputs, energies, momenta."""
@@ -177,41 +168,54 @@ class DynamicRun:
 
     def solve(self, t0: float):
         """Integrate from t = 0 (or the restart step) to the end time; ``t0``: when the solve's clock started.
-        Returns the :class:`integrators.generalized_alpha.DynamicResult`."""
+        Returns the :class:`integrators.generalized_alpha.DynamicResult`; the energies and momenta are
+        accounted for by an :class:`flexbody.energy.EnergyAccount` observing the integrator."""
+        from flexbody.energy import EnergyAccount
         from integrators.generalized_alpha import generalized_alpha
 
         dyn, a, restart, state, v0 = self.dyn, self.analysis, self.restart, self.state, self.v0
         if restart is None:
+            account = EnergyAccount(dyn, self._record_step)
             vdot0 = dyn.initial_acceleration(state, 0.0, v0)
-            first = _state_record(dyn, 0, 0.0, state, v0, 0.0)
+            first = account.state_record(0, 0.0, state, v0)
             first.motion = {"v": v0, "vdot": vdot0, "a": vdot0}
             self.record(first, state, v0, initial=True)
-            result = generalized_alpha(dyn, a.end_time, a.time_step, state=state, velocity=v0,
-                                       settings=a.alpha_settings(), on_step=self.record, record_every=a.output_every)
+            options = dict(t_start=0.0)
+            h = a.time_step
         else:                                  # continue a saved run (flexbody.outputs.restart)
             h = self.h
             if not 0 <= restart.step < a.n_steps:
                 raise ValueError(f"restart step {restart.step} is not before the last step {a.n_steps}")
             state, v0 = restart.state, restart.v
-            first = _state_record(dyn, restart.step, restart.step * h, state, v0, 0.0, restart.dissipated_energy)
+            account = EnergyAccount(dyn, self._record_step, restart.dissipated_energy)
+            first = account.state_record(restart.step, restart.step * h, state, v0)
             first.motion = {"v": v0, "vdot": restart.vdot, "a": restart.a}
             self.record(first, state, v0, initial=True)
+            options = dict(t_start=restart.step * h, acceleration=restart.vdot, pseudo_acceleration=restart.a,
+                           first_step=restart.step)
+        try:
             result = generalized_alpha(dyn, a.end_time, h, state=state, velocity=v0, settings=a.alpha_settings(),
-                                       on_step=self.record, record_every=a.output_every, t_start=restart.step * h,
-                                       acceleration=restart.vdot, pseudo_acceleration=restart.a,
-                                       first_step=restart.step, dissipated_energy=restart.dissipated_energy)
+                                       observers=(account,), record_every=a.output_every, **options)
+        except KeyboardInterrupt:              # Ctrl-C / a stop request: record the last converged step, then stop
+            account.interrupted()
+            raise
         if result.time > self.history["time"][-1]:  # stopped between two output steps: record where it stopped
-            last = _state_record(dyn, _steps_taken(result, a), result.time, result.state, result.velocity,
-                                 time.perf_counter() - t0, result.dissipated_energy)
+            last = account.state_record(_steps_taken(result, a), result.time, result.state, result.velocity,
+                                        time.perf_counter() - t0)
             last.motion = {"v": result.velocity, "vdot": result.acceleration, "a": result.pseudo_acceleration}
-            result.records.append(last)
-            self.record(last, result.state, result.velocity)
+            self._record_step(last, result.state, result.velocity)
         return result
+
+    def _record_step(self, rec, q, v) -> None:
+        """Record a step after the start (an output step, or the last converged one of a stopped run)."""
+        self.records.append(rec)
+        self.record(rec, q, v)
 
     def summary(self, result, errors: list[dict], wall: float, setup: float, compile_time: float) -> DynamicRunSummary:
         scene, model = self.scene, self.scene.model
         size = float(np.linalg.norm(np.ptp(model.body.mesh.nodes, axis=0)))
         return DynamicRunSummary(scene.name, model.n_dof, model.body.mesh.n_elements, result, self.history, errors,
                                  wall, setup, compile_time, analysis=self.analysis, energies=self.energies,
+                                 records=self.records,
                                  total_mass=self.dyn.inertia.total_mass, isolated=_is_isolated(scene),
                                  conservative=_is_conservative(scene), rotation_per_step=self.turn, size=size)

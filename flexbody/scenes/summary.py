@@ -23,7 +23,7 @@ which ``flexbody run`` reports with exit code 3.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
@@ -152,6 +152,8 @@ class DynamicRunSummary(RunSummary):
     rotation_per_step : the largest rotation per time step |omega| h over the recorded instants
         (:func:`flexbody.scenes.dynamic_run.rotation_rate`) and its time
     size : the diagonal of the body's bounding box in the reference configuration
+    records : the step records (:class:`flexbody.energy.DynamicStepRecord`) after the start: every output step,
+        and the last converged one of a run that stopped between two
     """
 
     kind: ClassVar[str] = "dynamic"
@@ -164,6 +166,7 @@ class DynamicRunSummary(RunSummary):
     conservative: bool
     rotation_per_step: tuple[float, float] = (0.0, 0.0)
     size: float = 0.0
+    records: list = field(default_factory=list)
 
     @property
     def largest_step(self) -> float:
@@ -188,7 +191,7 @@ class DynamicRunSummary(RunSummary):
     @property
     def steps(self) -> int:
         """Time steps taken (the last recorded one; all of them for a completed run)."""
-        return self.result.records[-1].step if self.result.records else 0
+        return self.records[-1].step if self.records else 0
 
     def energy_summary(self) -> dict:
         """Initial and final energies, and the largest drift of the balance T + W + V_g + D (module docstring;

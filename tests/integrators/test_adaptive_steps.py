@@ -18,7 +18,8 @@ from flexbody.mesh import generators
 from flexbody.shell.material import ShellMaterial
 from integrators.generalized_alpha import (AlphaParameters, AlphaSettings, GeneralizedAlpha, generalized_alpha,
                                            local_error_estimate, shifted_pseudo_acceleration)
-from tests.integrators.test_generalized_alpha import Oscillator, beam_omega1, cantilever, mode1_velocity
+from tests.integrators.test_generalized_alpha import beam_omega1, cantilever, mode1_velocity
+from tests.integrators.toy import Oscillator, OutputSteps
 
 pytestmark = pytest.mark.usefixtures("one_numba_thread")
 
@@ -37,9 +38,9 @@ def test_the_estimate_is_the_local_error_of_the_oscillator(rho_inf):
         vdot = -q.copy()
         a = vdot.copy()
         for _ in range(int(round(1.0 / h))):          # settle a on the scheme's pseudo-acceleration
-            st, *_ = ga.step(q, v, vdot, a, t)
+            st = ga.step(q, v, vdot, a, t)
             q, v, vdot, a, t = st.state, st.v, st.vdot, st.a, t + h
-        st, *_ = ga.step(q, v, vdot, a, t)
+        st = ga.step(q, v, vdot, a, t)
         true = st.state[0] - (q[0] * math.cos(h) + v[0] * math.sin(h))
         ratios.append(local_error_estimate(st.a, a, h, p)[0] / true)
         errors.append(abs(true))
@@ -53,10 +54,11 @@ def test_global_error_follows_the_tolerance_and_the_run_ends_at_t_end():
     """Error per step ~ tol at steps h ~ tol^(1/3): the global error ~ (t/h) tol ~ tol^(2/3)."""
     errors, steps = [], []
     for tol in (1e-5, 1e-6, 1e-7):
-        out = generalized_alpha(Oscillator([1.0]), 10.0, 10.0, state=np.array([1.0]),
+        log = OutputSteps()
+        out = generalized_alpha(Oscillator([1.0]), 10.0, 10.0, state=np.array([1.0]), observers=[log],
                                 settings=AlphaSettings(rho_inf=0.9, rtol=1e-13, atol=1e-15, adaptive=True,
                                                        error_tolerance=tol))
-        assert out.converged and out.time == 10.0 and out.records[-1].time == 10.0
+        assert out.converged and out.time == 10.0 and log.steps[-1].time == 10.0
         errors.append(abs(out.state[0] - math.cos(10.0)))
         steps.append(out.steps)
     slopes = np.log10(np.array(errors[:-1]) / errors[1:])
@@ -65,16 +67,19 @@ def test_global_error_follows_the_tolerance_and_the_run_ends_at_t_end():
 
 
 def test_records_land_on_the_output_times_and_count_every_step():
+    log = OutputSteps()
     out = generalized_alpha(Oscillator([1.0, 30.0]), 2.0, 0.25, state=np.array([1.0, 0.01]), record_every=2,
-                            settings=AlphaSettings(adaptive=True, error_tolerance=1e-6, rtol=1e-12, atol=1e-14))
+                            settings=AlphaSettings(adaptive=True, error_tolerance=1e-6, rtol=1e-12, atol=1e-14),
+                            observers=[log])
     assert out.converged, out.message
-    np.testing.assert_allclose([r.time for r in out.records], [0.5, 1.0, 1.5, 2.0], rtol=0, atol=1e-15)
-    assert sum(r.substeps for r in out.records) == out.steps == out.records[-1].step
-    assert sum(r.rejected_error for r in out.records) == out.rejected_error
-    assert all(0 < r.h <= 0.5 and r.error_estimate <= 1.0 for r in out.records)
+    np.testing.assert_allclose([r.time for r in log.steps], [0.5, 1.0, 1.5, 2.0], rtol=0, atol=1e-15)
+    assert sum(r.substeps for r in log.steps) == out.steps == log.steps[-1].index
+    assert sum(r.rejected_error for r in log.steps) == out.rejected_error
+    assert all(0 < r.h <= 0.5 and r.error_estimate <= 1.0 for r in log.steps)
     assert out.min_step < out.max_step <= 0.5
-    fixed = generalized_alpha(Oscillator([1.0]), 1.0, 0.25, state=np.array([1.0]))   # the fixed step's records
-    assert [r.h for r in fixed.records] == [0.25] * 4 and fixed.steps == 4 and not fixed.adaptive
+    fixed_log = OutputSteps()                                                           # the fixed step's records
+    fixed = generalized_alpha(Oscillator([1.0]), 1.0, 0.25, state=np.array([1.0]), observers=[fixed_log])
+    assert [r.h for r in fixed_log.steps] == [0.25] * 4 and fixed.steps == 4 and not fixed.adaptive
     assert fixed.rejected_error == fixed.rejected_newton == 0 and fixed.min_step == fixed.max_step == 0.25
 
 
@@ -97,7 +102,8 @@ def test_the_same_steps_in_micrometres_and_kilometres():
         hs = []
         out = generalized_alpha(dyn, 0.25 * period, period / 16, velocity=v0,
                                 settings=AlphaSettings(adaptive=True, error_tolerance=1e-5),
-                                on_step=lambda rec, q, v: hs.append((rec.h, rec.substeps, rec.rejected_error)))
+                                observers=[OutputSteps(lambda step: hs.append((step.h, step.substeps,
+                                                                               step.rejected_error)))])
         assert out.converged, out.message
         runs[s] = (hs, out.state.x / s)
     for s in (1e-6, 1e3):
@@ -137,12 +143,12 @@ def test_the_estimate_after_a_change_of_step_needs_the_shifted_pseudo_accelerati
     vdot = -q.copy()
     a = vdot.copy()
     for _ in range(80):
-        st, *_ = ga.step(q, v, vdot, a, t)
+        st = ga.step(q, v, vdot, a, t)
         a_prev, q, v, vdot, a, t = a, st.state, st.v, st.vdot, st.a, t + h
     h2 = change * h
     ratios = []
     for a_n in (shifted_pseudo_acceleration(a, a_prev, h, h2, p), a):
-        st, *_ = GeneralizedAlpha(dyn, h2, settings).step(q, v, vdot, a_n, t)
+        st = GeneralizedAlpha(dyn, h2, settings).step(q, v, vdot, a_n, t)
         true = st.state[0] - (q[0] * math.cos(h2) + v[0] * math.sin(h2))
         ratios.append(local_error_estimate(st.a, a_n, h2, p)[0] / true)
     assert abs(ratios[0] - 1.0) < 0.02 and abs(ratios[1] - 1.0) > 0.2, ratios

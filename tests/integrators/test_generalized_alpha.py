@@ -17,51 +17,20 @@ from flexbody.dynamics import DynamicModel, PrescribedMotion, director_step
 from flexbody.lie import so3
 from flexbody.mesh import generators
 from flexbody.shell.material import ShellMaterial
+from flexbody.energy import integrate_motion
 from integrators.generalized_alpha import AlphaParameters, AlphaSettings, generalized_alpha
+from tests.integrators.toy import Oscillator, OutputSteps
 
 
 pytestmark = pytest.mark.usefixtures("one_numba_thread")
 
 
 # -- the scheme on a linear oscillator ----------------------------------------------------------------------
-class Oscillator:
-    """M x'' + K x = 0 on R^n with the interface the integrator uses (the group is R^n: q o exp(d) = q + d)."""
-
-    def __init__(self, omegas):
-        self.omegas = np.asarray(omegas, float)
-        self.mass = np.ones(len(self.omegas))
-        self.dof_scale = 1.0
-        self.n_dof = len(self.omegas)
-
-    def residual(self, q, v, vdot, t):
-        return self.mass * vdot + self.omegas**2 * q
-
-    def residual_and_tangent(self, q, v, vdot, t):
-        return self.residual(q, v, vdot, t), sp.diags(self.omegas**2).tocsc()
-
-    def update(self, q, dq):
-        return q + dq
-
-    def initial_acceleration(self, q, t=0.0, v=None):
-        return -self.omegas**2 * q / self.mass
-
-    def kinetic_energy(self, v):
-        return 0.5 * float(v @ v)
-
-    def strain_energy(self, q):
-        return 0.5 * float(np.sum(self.omegas**2 * q * q))
-
-    def gravity_potential(self, q):
-        return 0.0
-
-    def momenta(self, q, v):
-        return np.zeros(3), np.zeros(3)
-
-
-def osc_run(omegas, x0, t_end, h, rho_inf, on_step=None):
+def osc_run(omegas, x0, t_end, h, rho_inf, on_output=None):
     dyn = Oscillator(omegas)
     out = generalized_alpha(dyn, t_end, h, state=np.asarray(x0, float),
-                            settings=AlphaSettings(rho_inf=rho_inf, rtol=1e-12, atol=1e-14), on_step=on_step)
+                            settings=AlphaSettings(rho_inf=rho_inf, rtol=1e-12, atol=1e-14),
+                            observers=[OutputSteps(on_output)])
     assert out.converged, out.message
     return out
 
@@ -91,7 +60,7 @@ def amplification_matrix(p: AlphaParameters, h: float, omega: float) -> np.ndarr
 def test_steps_follow_the_amplification_matrix(rho_inf, h_omega):
     omega, h = 2.0, h_omega / 2.0
     xs = []
-    osc_run([omega], [1.0], 20 * h, h, rho_inf, on_step=lambda rec, q, v: xs.append(q[0]))
+    osc_run([omega], [1.0], 20 * h, h, rho_inf, on_output=lambda step: xs.append(step.state[0]))
     A = amplification_matrix(AlphaParameters.from_rho_inf(rho_inf), h, omega)
     z = np.array([1.0, 0.0, -omega**2, -omega**2])
     expected = []
@@ -111,7 +80,8 @@ def test_asymptotic_annihilation():
     """rho_inf = 0 removes a mode with h omega = 1e4 within a few steps (initial amplitude omega)."""
     omega = 1e4
     amp = []
-    osc_run([omega], [1.0], 10.0, 1.0, 0.0, on_step=lambda rec, q, v: amp.append(math.hypot(omega * q[0], v[0])))
+    osc_run([omega], [1.0], 10.0, 1.0, 0.0,
+            on_output=lambda step: amp.append(math.hypot(omega * step.state[0], step.velocity[0])))
     # measured amplitudes / omega: 2.5e3 (the first step overshoots in velocity, a known property of the
     # method as h omega -> infinity), 0.5, 1e-4, 2.5e-5, 5e-9, 2e-12 (step 6), ..., 2.5e-21 (step 10)
     assert max(amp[5:]) < 1e-8 * omega
@@ -157,9 +127,10 @@ def settled_plate(one_numba_thread):
 def tumble(settled, h, t_end=3.0):
     dyn, s0, pre = settled
     history = []
-    res = generalized_alpha(dyn, t_end, h, state=pre.state, velocity=pre.velocity,
-                            settings=AlphaSettings(rho_inf=0.9),
-                            on_step=lambda rec, q, v: history.append((rec.time, fitted_angular_velocity(dyn, q, v))))
+    run = integrate_motion(dyn, t_end, h, state=pre.state, velocity=pre.velocity,
+                           settings=AlphaSettings(rho_inf=0.9),
+                           on_step=lambda rec, q, v: history.append((rec.time, fitted_angular_velocity(dyn, q, v))))
+    res = run.result
     assert res.converged, res.message
     # independent reference: Euler's equations of the rigid body with the discrete inertia, solve_ivp
     Q0 = dyn.body_rotation(s0.x, pre.state.x)
@@ -177,25 +148,25 @@ def tumble(settled, h, t_end=3.0):
     w_ref = np.array([sol.y[:9, k].reshape(3, 3) @ sol.y[9:, k] for k in range(len(ts))])
     w_fe = np.array([w for _, w in history])
     w_err = np.linalg.norm(w_fe - w_ref, axis=1).max() / np.linalg.norm(wb0)
-    recs = [res.initial] + res.records
+    recs = [run.initial] + run.records
     E = np.array([r.total_energy for r in recs])
     L = np.array([r.angular_momentum for r in recs])
-    return res, w_ref, w_err, np.abs(E - E[0]).max() / E[0], np.abs(L - L[0]).max() / np.linalg.norm(L[0])
+    return run, w_ref, w_err, np.abs(E - E[0]).max() / E[0], np.abs(L - L[0]).max() / np.linalg.norm(L[0])
 
 
 def test_tumbling_plate_matches_rigid_body_and_conserves(settled_plate):
-    res, w_ref, w_err, e_err, l_err = tumble(settled_plate, 0.005)
+    run, w_ref, w_err, e_err, l_err = tumble(settled_plate, 0.005)
     # the perturbation grows to a large tumbling excursion (intermediate-axis instability): measured 3.29
     assert np.abs(w_ref[:, 0]).max() > 3.0 and np.abs(w_ref[:, 2]).max() > 3.0
     assert w_err < 1e-3          # measured 7.1e-4 of |omega| over 3 s (600 steps)
     assert e_err < 5e-6          # measured 3.1e-6
     assert l_err < 5e-5          # measured 3.4e-5
     # every step carries its outputs
-    rec = res.records[10]
+    rec = run.records[10]
     assert rec.iterations >= 2 and len(rec.residuals) == rec.iterations and rec.linear_momentum.shape == (3,)
     # one factorization serves all 600 steps (2 iterations each): it is carried along the rigid rotation
     # and the frames' drilling drift (DynamicModel.transfer); measured: 1 (558 without the drilling part)
-    assert res.stats.factorizations <= 3
+    assert run.result.stats.factorizations <= 3
 
 
 def test_tumbling_errors_are_second_order(settled_plate):
@@ -264,7 +235,7 @@ def test_cantilever_natural_frequency():
     v0 = mode1_velocity(mesh, dyn, 1e-3)
     hist = []
     out = generalized_alpha(dyn, 2.0 * period, period / 80, velocity=v0, settings=AlphaSettings(rho_inf=1.0),
-                            on_step=lambda rec, q, v: hist.append((rec.time, q.x[tip, 2].mean())))
+                            observers=[OutputSteps(lambda step: hist.append((step.time, step.state.x[tip, 2].mean())))])
     assert out.converged, out.message
     t, w = np.array(hist).T
     k = np.flatnonzero((w[:-1] > 0) != (w[1:] > 0))
@@ -293,8 +264,9 @@ def test_spinning_annulus_reaches_the_rotating_disk_stretch():
     mesh = generators.annulus(a, b, 2, 16)
     dyn = DynamicModel(Model(ShellBody(mesh, ShellMaterial(E, nu, h, density=rho))))
     s = dyn.model.initial_state()
-    out = generalized_alpha(dyn, 0.1, 1e-3, state=s, velocity=dyn.rigid_velocity(s, [0, 0, 20.0]),
-                            settings=AlphaSettings(rho_inf=0.0))
+    run = integrate_motion(dyn, 0.1, 1e-3, state=s, velocity=dyn.rigid_velocity(s, [0, 0, 20.0]),
+                           settings=AlphaSettings(rho_inf=0.0))
+    out = run.result
     assert out.converged, out.message
     q = out.state
     xdot, _ = dyn.nodal_velocities(q, out.velocity)
@@ -308,7 +280,7 @@ def test_spinning_annulus_reaches_the_rotating_disk_stretch():
         assert u.mean() == pytest.approx(exact.mean(), rel=1e-2)   # measured +0.42 % (inner), +0.41 % (outer)
     # settled: the breathing decays ~7x per 10 steps; over the last 10 steps the strain energy changes
     # by 5.7e-6 (the slow spin-down of rho_inf = 0); one factorization served all 100 steps
-    se = [r.strain_energy for r in out.records[-10:]]
+    se = [r.strain_energy for r in run.records[-10:]]
     assert np.ptp(se) < 1e-4 * se[-1]
     assert out.stats.factorizations <= 2
 
@@ -322,13 +294,14 @@ def test_free_fall_is_exact_and_conserves_energy():
     dyn = DynamicModel(Model(ShellBody(mesh, ShellMaterial(1e6, 0.3, 0.01, density=1000.0))), gravity=g)
     s = dyn.model.initial_state()
     v0 = dyn.rigid_velocity(s, [0, 0, 0], v0=[1.0, 0.0, 2.0])
-    out = generalized_alpha(dyn, 1.0, 0.1, state=s, velocity=v0, settings=AlphaSettings(rho_inf=0.7))
+    run = integrate_motion(dyn, 1.0, 0.1, state=s, velocity=v0, settings=AlphaSettings(rho_inf=0.7))
+    out = run.result
     assert out.converged, out.message
     expected = mesh.nodes + np.array([1.0, 0.0, 2.0]) + 0.5 * g
     assert np.abs(out.state.x - expected).max() < 1e-10
-    E = [r.kinetic_energy + r.potential_energy for r in [out.initial] + out.records]
+    E = [r.kinetic_energy + r.potential_energy for r in [run.initial] + run.records]
     assert np.ptp(E) < 1e-10 * abs(E[0])
-    p = out.records[-1].linear_momentum
+    p = run.records[-1].linear_momentum
     assert np.allclose(p, dyn.inertia.total_mass * (np.array([1.0, 0.0, 2.0]) + g), rtol=1e-10)
 
 
@@ -367,11 +340,13 @@ def test_cutbacks_rescue_a_large_amplitude_step():
     t_end = 0.5 * period
     plain = generalized_alpha(dyn, t_end, period / 40, velocity=v0, settings=AlphaSettings(rho_inf=0.9))
     assert not plain.converged and "failed" in plain.message
-    cut = generalized_alpha(dyn, t_end, period / 40, velocity=v0, settings=AlphaSettings(rho_inf=0.9, max_cutbacks=4))
+    steps = OutputSteps()
+    cut = generalized_alpha(dyn, t_end, period / 40, velocity=v0, settings=AlphaSettings(rho_inf=0.9, max_cutbacks=4),
+                            observers=[steps])
     assert cut.converged, cut.message
-    assert max(r.substeps for r in cut.records) > 1
-    assert cut.rejected_newton == sum(r.rejected_newton for r in cut.records) > 0     # the failed tries, counted
-    assert cut.steps == sum(r.substeps for r in cut.records) and cut.min_step < cut.max_step == period / 40
+    assert max(r.substeps for r in steps.steps) > 1
+    assert cut.rejected_newton == sum(r.rejected_newton for r in steps.steps) > 0     # the failed tries, counted
+    assert cut.steps == sum(r.substeps for r in steps.steps) and cut.min_step < cut.max_step == period / 40
     ref = generalized_alpha(dyn, t_end, period / 320, velocity=v0, settings=AlphaSettings(rho_inf=0.9))
     assert ref.converged, ref.message
     # measured 9.5e-3 m with 2 steps cut (4 m/s: 2.85e-3 m): the cut steps cost the second order locally
@@ -402,11 +377,13 @@ def test_contraction_floor_accepts_only_converged_iterates():
     mesh, dyn = cantilever()
     period = 2 * math.pi / beam_omega1()
     v0 = mode1_velocity(mesh, dyn, 2.0)
-    runs = {name: generalized_alpha(dyn, 0.5 * period, period / 40, velocity=v0, settings=AlphaSettings(rho_inf=0.9, **kw))
+    logs = {name: OutputSteps() for name in ("default", "floor", "tight")}
+    runs = {name: generalized_alpha(dyn, 0.5 * period, period / 40, velocity=v0, observers=[logs[name]],
+                                    settings=AlphaSettings(rho_inf=0.9, **kw))
             for name, kw in (("default", {}), ("floor", {"contraction_floor": 0.3}),
                              ("tight", {"contraction_floor": 0.3, "rtol": 1e-12, "atol": 1e-14}))}
     assert all(run.converged for run in runs.values())
-    last = {name: max(r.corrections[-1] for r in run.records) for name, run in runs.items()}
+    last = {name: max(r.corrections[-1] for r in log.steps) for name, log in logs.items()}
     assert last["floor"] <= 0.7 / 0.3 < 10.0 < last["default"]
     dv = {name: np.abs(runs[name].velocity - runs["tight"].velocity).max() for name in ("default", "floor")}
     assert dv["floor"] < 0.3 * dv["default"]

@@ -12,13 +12,13 @@ from flexbody.shell.material import ShellMaterial
 from flexbody.mesh import generators
 from flexbody.spinning import SpinningModel
 from integrators.generalized_alpha import StepTaken, generalized_alpha
-from integrators.protocols import (ConjugateMatrix, Damped, DynamicProblem, LumpedMass, MassMatrix,
-                                   MixedIteration, Prescribed, StaticProblem, StressedState, SupportCheck,
-                                   TransferAlongMotion, WrapsStaticProblem, members, missing, require)
+from integrators.protocols import (AcceptedStep, ConjugateMatrix, Damped, DynamicProblem, LumpedMass, MassMatrix,
+                                   MixedIteration, Prescribed, StaticProblem, StepObserver, StressedState,
+                                   SupportCheck, TransferAlongMotion, WrapsStaticProblem, capabilities, members,
+                                   missing, require)
 from integrators.static import arc_length, load_control
-from tests.integrators.test_generalized_alpha import Oscillator
 from tests.integrators.test_scale_free import Duffing
-from tests.integrators.toy import CubicSpring, HardeningSpring
+from tests.integrators.toy import CubicSpring, HardeningSpring, Oscillator
 
 
 def strip_model() -> Model:
@@ -95,7 +95,7 @@ def test_a_static_model_without_a_required_member_is_refused_naming_it(hidden, s
                        f"(the contract integrators.protocols.StaticProblem)")
 
 
-@pytest.mark.parametrize("hidden", ["momenta", "n_dof", "mass"])
+@pytest.mark.parametrize("hidden", ["initial_acceleration", "n_dof", "mass"])
 def test_a_dynamic_model_without_a_required_member_is_refused_naming_it(hidden):
     dyn = _Without(Oscillator([1.0]), hidden)
     with pytest.raises(TypeError) as info:
@@ -111,14 +111,14 @@ def test_a_dynamic_problem_without_a_static_model_needs_a_start():
 
 
 def test_a_capability_is_used_only_when_complete():
-    """A model with half a capability (damping_force without damping_matrix) is taken as undamped."""
+    """A model with half a capability (prescribe under another name) does without it."""
 
-    class HalfDamped(Oscillator):
-        def damping_force(self, q, v):
+    class HalfPrescribed(Oscillator):
+        def prescribe_nodes(self, q, t):
             raise AssertionError("never called")
 
-    dyn, half = Oscillator([1.0]), HalfDamped([1.0])
-    assert not isinstance(half, Damped)
+    dyn, half = Oscillator([1.0]), HalfPrescribed([1.0])
+    assert not isinstance(half, Prescribed) and capabilities(half).prescribed is None
     a = generalized_alpha(dyn, 1.0, 0.1, state=np.ones(1))
     b = generalized_alpha(half, 1.0, 0.1, state=np.ones(1))
     assert np.array_equal(a.state, b.state) and a.stats.iterations == b.stats.iterations
@@ -127,9 +127,40 @@ def test_a_capability_is_used_only_when_complete():
 def test_the_halves_of_a_cut_step_sum_their_work():
     """StepTaken.then: the end values of the second half, the histories in order, the failed try counted."""
     one, two = np.ones(1), 2 * np.ones(1)
-    first = StepTaken("q1", one, one, one, 3, [1.0, 0.1], [5.0], 1, 1, 0, 0.5)
-    second = StepTaken("q2", two, two, two, 2, [0.2], [4.0, 0.5], 0, 2, 1, 0.25)
+    first = StepTaken("q1", one, one, one, iterations=3, residuals=[1.0, 0.1], corrections=[5.0], refreshes=1,
+                      substeps=1, failures=0, h=0.5)
+    second = StepTaken("q2", two, two, two, iterations=2, residuals=[0.2], corrections=[4.0, 0.5], refreshes=0,
+                       substeps=2, failures=1, h=0.25)
     both = first.then(second)
     assert (both.state, both.v[0], both.vdot[0], both.a[0], both.h) == ("q2", 2.0, 2.0, 2.0, 0.25)
     assert (both.iterations, both.refreshes, both.substeps, both.failures) == (5, 1, 3, 2)
     assert both.residuals == [1.0, 0.1, 0.2] and both.corrections == [5.0, 4.0, 0.5]
+
+
+def test_the_dynamic_contract_has_no_energies_nor_momenta():
+    """What the integrator records is observed from outside (flexbody.energy): the contract asks for none."""
+    assert members(DynamicProblem) == ["n_dof", "dof_scale", "update", "residual", "residual_and_tangent",
+                                       "initial_acceleration"]
+    assert members(Damped) == ["damping_matrix"]
+
+
+def test_capabilities_are_resolved_in_one_place():
+    dyn = DynamicModel(strip_model(), damping=RayleighDamping(0.1, 0.0))
+    caps = capabilities(dyn)
+    assert caps.damped is caps.prescribed is caps.transfer is caps.mass_matrix is dyn
+    assert caps.static_model is dyn.model and caps.mixed_iteration is None
+    model_caps = capabilities(dyn.model)
+    assert model_caps.mixed_iteration is model_caps.support_check is model_caps.conjugate_matrix is dyn.model
+    assert capabilities(Oscillator([1.0])) == type(caps)()                 # none at all
+
+
+def test_observers_get_the_start_and_every_step_in_order():
+    seen = []
+    out = generalized_alpha(Oscillator([1.0]), 1.0, 0.25, state=np.ones(1), record_every=3, observers=[seen.append])
+    assert isinstance(seen.append, StepObserver) and all(isinstance(s, AcceptedStep) for s in seen)
+    assert [(s.index, s.initial, s.output) for s in seen] == [(0, True, False), (1, False, False),
+                                                              (2, False, False), (3, False, True), (4, False, True)]
+    assert seen[0].step_size == 0.0 and seen[0].iterations == 0 and np.array_equal(seen[0].state, np.ones(1))
+    assert all(s.step_size == 0.25 and s.iterations >= 1 for s in seen[1:])
+    assert all(np.array_equal(b.previous_velocity, a.velocity) for a, b in zip(seen, seen[1:]))
+    assert np.array_equal(seen[-1].state, out.state) and seen[-1].time == out.time == 1.0

@@ -1,4 +1,5 @@
-"""Small analytic models with the interface the static integrators use."""
+"""Small analytic models with the interfaces the integrators use (integrators.protocols), and an observer
+that keeps the output steps of a dynamic run."""
 
 import numpy as np
 import scipy.sparse as sp
@@ -59,3 +60,40 @@ class HardeningSpring(_OneDof):
 
     def residual_and_tangent(self, q, lam):
         return self.residual(q, lam), sp.csc_matrix([[1.0 + 3.0 * q[0] ** 2]])
+
+
+class Oscillator:
+    """M x'' + K x = 0 on R^n, M = I, K = diag(omega^2): exactly the members of
+    integrators.protocols.DynamicProblem with a diagonal mass (the group is R^n: q o exp(d) = q + d)."""
+
+    def __init__(self, omegas):
+        self.omegas = np.asarray(omegas, float)
+        self.mass = np.ones(len(self.omegas))
+        self.dof_scale = 1.0
+        self.n_dof = len(self.omegas)
+
+    def residual(self, q, v, vdot, t):
+        return self.mass * vdot + self.omegas**2 * q
+
+    def residual_and_tangent(self, q, v, vdot, t):
+        return self.residual(q, v, vdot, t), sp.diags(self.omegas**2).tocsc()
+
+    def update(self, q, dq):
+        return q + dq
+
+    def initial_acceleration(self, q, t=0.0, v=None):
+        return -self.omegas**2 * q / self.mass
+
+
+class OutputSteps:
+    """A step observer keeping the output steps (integrators.protocols.AcceptedStep) of a run, and calling
+    ``then(step)`` with each if given."""
+
+    def __init__(self, then=None):
+        self.steps, self.then = [], then
+
+    def __call__(self, step):
+        if step.output:
+            self.steps.append(step)
+            if self.then is not None:
+                self.then(step)

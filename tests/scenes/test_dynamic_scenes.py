@@ -214,7 +214,7 @@ def test_output_every_thins_the_records_but_not_the_steps():
     a = DynamicAnalysis(1e-3, 0.01, output_every=4)
     np.testing.assert_allclose(a.output_times(), [0.0, 0.004, 0.008, 0.01])
     s = run_scene(build("spinning_plate", nx=1, ny=1, end_time=0.01, dt=1e-3, output_every=4))
-    assert s.steps == 10 and [r.step for r in s.result.records] == [4, 8, 10]
+    assert s.steps == 10 and [r.step for r in s.records] == [4, 8, 10]
     np.testing.assert_allclose(s.history["time"], a.output_times(), atol=1e-15)
 
 

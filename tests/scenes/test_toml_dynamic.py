@@ -150,7 +150,7 @@ def test_adaptive_steps_in_a_scene_file_land_on_the_output_times(tmp_path):
     np.testing.assert_allclose(s.history["time"], scene.analysis.output_times(), rtol=0, atol=1e-15)
     d = s.as_dict()
     steps = d["time_steps"]
-    assert steps["adaptive"] and steps["accepted"] == s.steps == sum(r.substeps for r in s.result.records)
+    assert steps["adaptive"] and steps["accepted"] == s.steps == sum(r.substeps for r in s.records)
     assert 0 < steps["min"] <= steps["max"] <= 2 * 2e-3 and d["time"] == 0.02
     # the fixed step: the same file without the key (and ``--set adaptive=false``)
     assert not load_toml_scene(write(tmp_path, text), {"adaptive": False}).analysis.is_adaptive

@@ -215,13 +215,13 @@ def test_tumbling_plate_with_consistent_mass_conserves_and_matches_the_rigid_bod
     v = dyn.rigid_velocity(s, [0.05, 5.0, 0.05], center=c)
     pre = generalized_alpha(dyn, 0.1, 0.005, state=s, velocity=v, settings=AlphaSettings(rho_inf=0.0))
     assert pre.converged, pre.message
-    res, w_ref, w_err, e_err, l_err = tumble((dyn, s, pre), 0.005, t_end=2.0)
+    run, w_ref, w_err, e_err, l_err = tumble((dyn, s, pre), 0.005, t_end=2.0)
     assert np.abs(w_ref[:, 0]).max() > 3.0               # it does tumble: measured 3.80
-    recs = [res.initial] + res.records
+    recs = [run.initial] + run.records
     p = np.array([r.linear_momentum for r in recs])
     assert np.abs(p).max() < 1e-9 * dyn.body_mass.total_mass * 5.0
     assert w_err < 1e-3 and e_err < 5e-6 and l_err < 5e-5          # measured 7.4e-4, 3.1e-6, 3.0e-5
-    assert res.stats.factorizations <= 3                           # measured 1: the transfer keeps M
+    assert run.result.stats.factorizations <= 3                           # measured 1: the transfer keeps M
 
 
 # -- frequencies ---------------------------------------------------------------------------------------------
