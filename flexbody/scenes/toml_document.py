@@ -1,5 +1,7 @@
-"""A scene file as a document: reading it, the key vocabulary of its tables, and the ``--set`` overrides by
-dotted key (``mesh.nx``, ``load.0.value``) or by the last part of a key when that is unambiguous."""
+"""A scene file as a document: reading it, and the ``--set`` overrides by dotted key (``mesh.nx``,
+``load.0.value``) or by the last part of a key when that is unambiguous. The bare keys that may be set although
+the file does not write them come from the table specs (:func:`flexbody.scenes.toml_spec.settable_keys`) and the
+mesh generator's parameters."""
 
 from __future__ import annotations
 
@@ -9,33 +11,8 @@ from pathlib import Path
 import tomllib
 from typing import Any, Callable
 
+from flexbody.scenes.toml_spec import GENERATOR_NAMES, settable_keys
 from flexbody.scenes.toml_values import SceneError
-
-
-#: mesh generators by name, and which of their parameters set the mesh density (used by ``flexbody bench``)
-GENERATOR_NAMES = ("strip", "slit_annulus", "annulus", "cylinder", "spherical_cap", "regular_polygon")
-DENSITY_PARAMETERS = {
-    "strip": ("nx", "ny"), "slit_annulus": ("n_radial", "n_circ"), "annulus": ("n_radial", "n_circ"),
-    "cylinder": ("n_circ", "n_axial"), "spherical_cap": ("n_meridian", "n_circ"), "regular_polygon": ("n_rings",),
-}
-#: generator parameters in radians that may be given in degrees with the suffix ``_deg``
-RADIAN_PARAMETERS = ("angle",)
-SECTIONS = ("name", "description", "mesh", "material", "element", "bc", "load", "point_mass", "analysis", "output",
-             "reference")
-SELECTORS = ("set", "nodes", "near", "plane", "ring")
-HUB_SHAPES = ("radius", "polygon")             # a hub's nodes may also be given by these
-VELOCITY_FIELD_KEYS = ("direction", "amplitude", "radial", "modes", "phase", "inner_radius", "outer_radius",
-                        "center", "axis")
-MATERIAL_KEYS = ("young", "poisson", "thickness", "density", "shear_correction")
-ANALYSIS_KEYS = ("method", "steps", "max_load_factor", "load_factors", "arc_increment", "max_load_increment",
-                  "max_steps", "min_increment_ratio", "max_increment_ratio", "desired_iterations", "newton",
-                  "stability")
-DYNAMIC_KEYS = ("type", "dt", "end_time", "rho_inf", "policy", "output_every", "gravity", "load_ramp_time",
-                 "initial", "hub", "integrator", "damping", "adaptive", "mass")
-DAMPING_KEYS = ("alpha_mass", "beta_stiffness", "ratio", "frequencies_hz")
-OUTPUT_TYPES = ("displacement", "radial", "angular_velocity")
-ELEMENT_KEYS = ("tying", "kernel")
-COMPONENTS = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -79,11 +56,7 @@ def flatten(doc: dict, prefix: str = "") -> dict[str, Any]:
 
 def section_keys(doc: dict) -> dict[str, str]:
     """Bare keys that may be set although the document does not write them: key -> dotted key."""
-    keys = {k: f"material.{k}" for k in MATERIAL_KEYS}
-    keys.update({k: f"analysis.{k}" for k in ANALYSIS_KEYS if k != "newton"})
-    keys.update({k: f"analysis.{k}" for k in DYNAMIC_KEYS if k not in ("type", "initial", "hub", "integrator",
-                                                                           "damping")})
-    keys.update({k: f"element.{k}" for k in ELEMENT_KEYS})
+    keys = settable_keys()
     generator = doc.get("mesh", {}).get("generator") if isinstance(doc.get("mesh"), dict) else None
     if generator in GENERATOR_NAMES:
         for k in inspect.signature(generator_function(generator)).parameters:

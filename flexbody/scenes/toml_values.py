@@ -1,6 +1,7 @@
 """Typed, checked access to the tables of a scene file: every bad value is one :class:`SceneError` line naming
-the file, the dotted key and the value (:class:`Table`); :func:`call_checked` does the same for a flexbody
-constructor's ValueError."""
+the file, the dotted key and the value (:class:`Table`); :func:`read_table` reads a table by its spec
+(:mod:`flexbody.scenes.toml_spec`); :func:`call_checked` turns a flexbody constructor's ValueError into the same
+kind of line."""
 
 from __future__ import annotations
 
@@ -9,15 +10,13 @@ from typing import Any, Callable
 
 import numpy as np
 
+from flexbody.scenes.toml_spec import MAX_STEPS, REQUIRED, Key, TableSpec
+
+__all__ = ["SceneError", "Table", "read_table", "read_value", "finish", "call_checked", "MAX_STEPS", "REQUIRED"]
+
 
 class SceneError(ValueError):
     """A scene that cannot be built as given; the message is one line naming the key and value."""
-
-
-REQUIRED = object()
-
-#: the most load steps a scene may ask for (a path needs far fewer; 1e10 steps exhausted the memory)
-MAX_STEPS = 100_000
 
 
 class Table:
@@ -128,6 +127,57 @@ class Table:
             where = f"[{self.path}]" if self.path else "the top level"
             raise SceneError(f"{self.where}: unknown key {self.key(unknown[0])!r}; "
                              f"keys allowed in {where}: {', '.join(allowed)}")
+
+
+_OWN = object()       # the key's own default
+
+
+def read_value(key: Key, t: Table, default: Any = _OWN) -> Any:
+    """The value of ``key`` in ``t``, checked against the key's kind, choices and range (``default``: the
+    key's own unless given; :data:`REQUIRED`: required here). An absent key whose default is None is None."""
+    name = key.name
+    default = key.default if default is _OWN else default
+    if default is None and not t.has(name):
+        t.used.add(name)
+        return None
+    if key.kind == "number":
+        value = t.number(name, default, positive=key.bound == ">0")
+        if key.bound == ">=0" and value < 0:
+            raise t.error(name, f"must be >= 0, got {value!r}")
+        return value
+    if key.kind == "integer":
+        return t.integer(name, default, minimum=key.minimum, maximum=key.maximum)
+    if key.kind == "string":
+        return t.string(name, default, choices=key.choices or None)
+    if key.kind == "tables":
+        return t.tables(name)
+    read = {"boolean": t.boolean, "vector": t.vector, "numbers": t.numbers, "any": t.raw, "table": t.table}
+    return read[key.kind](name, default)
+
+
+def read_table(spec: TableSpec, t: Table, variant: str | None = None, *, defaults: dict[str, Any] | None = None,
+               done: bool = True) -> dict[str, Any]:
+    """The values of the keys of ``spec`` in ``t``, in the spec's order, by :func:`read_value`.
+
+    The variant is the value of the spec's ``switch`` key (read first), or ``variant``: only its keys are read
+    and allowed. Node selections are left to the caller. ``defaults``: defaults that depend on the scene
+    (``name``: the file's name). ``done``: report a key the variant does not allow (else call :func:`finish`).
+    """
+    values: dict[str, Any] = {}
+    defaults = defaults or {}
+    if spec.switch is not None and variant is None:
+        variant = values[spec.switch] = read_value(spec[spec.switch], t, defaults.get(spec.switch, _OWN))
+    for key in spec.keys:
+        if key.kind != "selection" and key.name not in values and key.belongs_to(variant):
+            values[key.name] = read_value(key, t, defaults.get(key.name, _OWN))
+    if done:
+        finish(spec, t, variant)
+    return values
+
+
+def finish(spec: TableSpec, t: Table, variant: str | None = None) -> None:
+    """Report the first key of ``t`` that no one read, with the keys the ``variant`` of ``spec`` allows."""
+    t.done(spec.names(variant))
 
 
 def call_checked(where: str, key: str, func: Callable, *args, **kwargs):
