@@ -17,9 +17,11 @@ The modules, one per stage:
 * :mod:`~flexbody.shell.kernels.mitc7.points`: the nodal relative rotations, the kinematics, covariant strains
   and pulled-back stress weights of the evaluation points, and the shape-function tables;
 * :mod:`~flexbody.shell.kernels.mitc7.material`: the strain gradient D and the material stiffness;
-* :mod:`~flexbody.shell.kernels.mitc7.geometric`: the strain Hessian of the geometric stiffness;
+* :mod:`~flexbody.shell.kernels.mitc7.geometric`: the contracted second variation K_xi of a point (the
+  geometric stiffness in the 18 slots) and its bubble block;
 * :mod:`~flexbody.shell.kernels.mitc7.expansion`: point operators in the 18 slots expanded into z;
-* :mod:`~flexbody.shell.kernels.mitc7.congruence`: K_h = P^T K_z P;
+* :mod:`~flexbody.shell.kernels.mitc7.congruence`: f_h = P^T f_z, K_h = P^T K_z P and the nodal terms of
+  the derivative of P;
 * :mod:`~flexbody.shell.kernels.mitc7.augmented`: the augmented element (38 motions) at a given b, and only
   its bubble block (for the Newton on b);
 * :mod:`~flexbody.shell.kernels.mitc7.condensation`: Newton on b and the static condensation;

@@ -17,9 +17,9 @@ import numpy as np
 from flexbody import _numba
 from flexbody.lie import kernels as lk
 from flexbody.shell.geometry import N_GAUSS
-from flexbody.shell.kernels.mitc7.congruence import congruence
+from flexbody.shell.kernels.mitc7.congruence import congruence, force_to_nodes_into, nodal_terms_into
 from flexbody.shell.kernels.mitc7.expansion import expand_cols, expand_rows_add
-from flexbody.shell.kernels.mitc7.geometric import cross_into, hessian_col
+from flexbody.shell.kernels.mitc7.geometric import bubble_point_stiffness_into, point_stiffness_into
 from flexbody.shell.kernels.mitc7.material import gradient_col, gradient_T_s, material_z
 from flexbody.shell.kernels.mitc7.points import N_EVAL, NAUG, NDOF, kinematics_and_stresses
 
@@ -109,99 +109,12 @@ def evaluate_z(e, b, full, x, fr, dn, Ti, Tm, e_ref, to_cart, weights, C, c_sym,
         if not nonzero:
             continue
         # K_xi = G^T Hf(s) G + the second variation
-        for c in range(18):
-            hessian_col(s, Gx, c, Hx)
-        for r in range(18):                          # G^T Hf G (symmetric; rows 8, 11 of Hf G vanish)
-            for c in range(r, 18):
-                acc = 0.0
-                for k in range(8):
-                    acc += Gx[k, r] * Hx[k, c]
-                acc += Gx[9, r] * Hx[9, c] + Gx[10, r] * Hx[10, c]
-                Kx[r, c] = acc
-                Kx[c, r] = acc
-        for k in range(3):
-            au[0, k] = g[k]
-            au[1, k] = g[3 + k]
-            bw[0, k] = g[6 + k]
-            bw[1, k] = g[9 + k]
-        # W^T (sum_a hat(a_u) G_u,a), W = [0, 0, Q^T, T, 0, 0] (the rotation of R: w = W xi)
-        for c in range(18):
-            for k in range(3):
-                v3[k] = Gx[k, c]
-                w3[k] = Gx[3 + k, c]
-            X[0, c] = (au[0, 1] * v3[2] - au[0, 2] * v3[1]) + (au[1, 1] * w3[2] - au[1, 2] * w3[1])
-            X[1, c] = (au[0, 2] * v3[0] - au[0, 0] * v3[2]) + (au[1, 2] * w3[0] - au[1, 0] * w3[2])
-            X[2, c] = (au[0, 0] * v3[1] - au[0, 1] * v3[0]) + (au[1, 0] * w3[1] - au[1, 1] * w3[0])
-        for l in range(3):
-            for c in range(18):
-                Kx[6 + l, c] += Q[l, 0] * X[0, c] + Q[l, 1] * X[1, c] + Q[l, 2] * X[2, c]
-                Kx[9 + l, c] += T[0, l] * X[0, c] + T[1, l] * X[1, c] + T[2, l] * X[2, c]
-        # rows dx_,a: - R hat(a_a) W (Delta of R^T)
-        for k in range(3):
-            for l in range(3):
-                W[k, l] = Q[l, k]
-                W[k, 3 + l] = T[k, l]
-        for a in range(2):
-            for k in range(3):                       # t33 = R hat(a_a)
-                r0, r1, r2 = R[k, 0], R[k, 1], R[k, 2]
-                t33[k, 0] = r1 * au[a, 2] - r2 * au[a, 1]
-                t33[k, 1] = r2 * au[a, 0] - r0 * au[a, 2]
-                t33[k, 2] = r0 * au[a, 1] - r1 * au[a, 0]
-            for k in range(3):
-                for c in range(6):
-                    Kx[3 * a + k, 6 + c] -= t33[k, 0] * W[0, c] + t33[k, 1] * W[1, c] + t33[k, 2] * W[2, c]
-        # c = sum_a a_u x f_u;  M = -D T(-d)[.] c + sum_a D^2 T(d)[.,.](b_w, d_,a)  (rows and cols dd)
-        cross_into(au[0], F[0], v3)
-        cross_into(au[1], F[1], w3)
-        for k in range(3):
-            csum[k] = v3[k] + w3[k]
-        negd = (-d[0], -d[1], -d[2])
-        lk.d_tangent_co_into(negd, csum, co, M)
-        for k in range(3):
-            for l in range(3):
-                M[k, l] = -M[k, l]
-        for a in range(2):
-            lk.d2_tangent_co_into(d, bw[a], da[a], co, t33)
-            for k in range(3):
-                for l in range(3):
-                    M[k, l] += t33[k, l]
-        for k in range(3):
-            for l in range(3):
-                Kx[9 + k, 9 + l] += M[k, l]
-        # Jd^T Z^T Jda + Jda^T Z Jd,  Z = -D T(-d)[.] b_w
-        for a in range(2):
-            lk.d_tangent_co_into(negd, bw[a], co, Z)
-            for k in range(3):
-                for l in range(3):
-                    Kx[12 + 3 * a + k, 9 + l] -= Z[k, l]
-                    Kx[9 + l, 12 + 3 * a + k] -= Z[k, l]
-        # - Q hat(c) T in the dtheta_0 rows, dd cols
-        for k in range(3):
-            t33[k, 0] = Q[k, 1] * csum[2] - Q[k, 2] * csum[1]
-            t33[k, 1] = Q[k, 2] * csum[0] - Q[k, 0] * csum[2]
-            t33[k, 2] = Q[k, 0] * csum[1] - Q[k, 1] * csum[0]
-        for k in range(3):
-            for l in range(3):
-                Kx[6 + k, 9 + l] -= t33[k, 0] * T[0, l] + t33[k, 1] * T[1, l] + t33[k, 2] * T[2, l]
+        point_stiffness_into(s, g, F, Q, T, R, d, da, co, Gx, Hx, au, bw, X, v3, w3, W, t33, csum, M, Z, Kx)
         expand_cols(Kx, 18, p, EN, EDN, ENB, EDNB, Yx)
         expand_rows_add(Yx, p, EN, EDN, ENB, EDNB, Kz)
 
     # --- force in h: f_u = R_I^T f_x, f_theta_I = T^-1(d_I)^T f_dd, f_theta_0 = f_t0 - sum T^-1(-d_I)^T f_dd
-    for i in range(6):
-        for l in range(3):
-            fa[6 * i + l] = fr[i, 0, l] * fz[3 * i] + fr[i, 1, l] * fz[3 * i + 1] + fr[i, 2, l] * fz[3 * i + 2]
-    for l in range(3):
-        acc = fz[18 + l]
-        for i in range(1, 6):
-            z0 = 18 + 3 * i
-            acc -= Tm[i, 0, l] * fz[z0] + Tm[i, 1, l] * fz[z0 + 1] + Tm[i, 2, l] * fz[z0 + 2]
-        fa[3 + l] = acc
-    for i in range(1, 6):
-        z0 = 18 + 3 * i
-        for l in range(3):
-            fa[6 * i + 3 + l] = Ti[i, 0, l] * fz[z0] + Ti[i, 1, l] * fz[z0 + 1] + Ti[i, 2, l] * fz[z0 + 2]
-    fa[NDOF] = fz[NDOF]
-    fa[NDOF + 1] = fz[NDOF + 1]
+    force_to_nodes_into(fz, fr, Ti, Tm, fa)
     if not full:
         return
 
@@ -209,35 +122,7 @@ def evaluate_z(e, b, full, x, fr, dn, Ti, Tm, e_ref, to_cart, weights, C, c_sym,
     congruence(Kz, KP, fr, Ti, Tm, Ka)
 
     # --- nodal terms: hat(f_u,I) in (u_I, theta_I) (Delta R_I), and the D T^-1 terms of Delta delta d_I -------
-    for i in range(6):
-        w0, w1, w2 = fa[6 * i], fa[6 * i + 1], fa[6 * i + 2]
-        c0 = 6 * i + 3
-        Ka[6 * i, c0 + 1] -= w2
-        Ka[6 * i, c0 + 2] += w1
-        Ka[6 * i + 1, c0] += w2
-        Ka[6 * i + 1, c0 + 2] -= w0
-        Ka[6 * i + 2, c0] -= w1
-        Ka[6 * i + 2, c0 + 1] += w0
-    for i in range(1, 6):
-        z0 = 18 + 3 * i
-        for k in range(3):
-            E[i, k] = fz[z0 + k]
-        for sign in range(2):
-            if sign == 0:                            # rows theta_I: - D T^-1(-d_I)[.] E_I JdI
-                lk.d_tangent_inv_into((-dn[i, 0], -dn[i, 1], -dn[i, 2]), E[i], M)
-                r0 = 6 * i + 3
-            else:                                    # rows theta_0: - D T^-1(d_I)[.] E_I JdI
-                lk.d_tangent_inv_into(dn[i], E[i], M)
-                r0 = 3
-            for k in range(3):
-                for l in range(3):
-                    acc_i = 0.0
-                    acc_0 = 0.0
-                    for m in range(3):
-                        acc_i += M[k, m] * Ti[i, m, l]
-                        acc_0 += M[k, m] * Tm[i, m, l]
-                    Ka[r0 + k, 6 * i + 3 + l] -= acc_i
-                    Ka[r0 + k, 3 + l] += acc_0
+    nodal_terms_into(fa, fz, dn, Ti, Tm, E, M, Ka)
 
 
 @fast
@@ -294,54 +179,8 @@ def evaluate_bubble(e, b, x, fr, dn, e_ref, to_cart, weights, C, a_ptr, a_i, a_p
                 nonzero = True
         if not nonzero:
             continue
-        hessian_col(s, G, 0, HfG)
-        hessian_col(s, G, 1, HfG)
-        for q in range(2):
-            for q2 in range(2):
-                acc = 0.0
-                for k in range(12):
-                    acc += G[k, q] * HfG[k, q2]
-                t33[q, q2] = acc
-        for k in range(3):
-            au[0, k] = g[k]
-            au[1, k] = g[3 + k]
-            bw[0, k] = g[6 + k]
-            bw[1, k] = g[9 + k]
-        # rows dd (N_b T^T): T^T (sum_a hat(a_u) G_u,a)
-        for q in range(2):
-            for k in range(3):
-                v3[k] = G[k, q]
-                w3[k] = G[3 + k, q]
-            X[0, q] = (au[0, 1] * v3[2] - au[0, 2] * v3[1]) + (au[1, 1] * w3[2] - au[1, 2] * w3[1])
-            X[1, q] = (au[0, 2] * v3[0] - au[0, 0] * v3[2]) + (au[1, 2] * w3[0] - au[1, 0] * w3[2])
-            X[2, q] = (au[0, 0] * v3[1] - au[0, 1] * v3[0]) + (au[1, 0] * w3[1] - au[1, 1] * w3[0])
-        for q in range(2):
-            for q2 in range(2):
-                t33[q, q2] += nb * (T[0, q] * X[0, q2] + T[1, q] * X[1, q2] + T[2, q] * X[2, q2])
-        cross_into(au[0], F[0], v3)
-        cross_into(au[1], F[1], w3)
-        for k in range(3):
-            csum[k] = v3[k] + w3[k]
-        negd = (-d[0], -d[1], -d[2])
-        lk.d_tangent_co_into(negd, csum, co, M)
-        for k in range(2):
-            for l in range(2):
-                M[k, l] = -M[k, l]
-        for a in range(2):
-            lk.d2_tangent_co_into(d, bw[a], da[a], co, Z)
-            for k in range(2):
-                for l in range(2):
-                    M[k, l] += Z[k, l]
-        nn = nb * nb
-        for k in range(2):
-            for l in range(2):
-                t33[k, l] += nn * M[k, l]
-        for a in range(2):
-            lk.d_tangent_co_into(negd, bw[a], co, Z)
-            wa = nb * (nbr if a == 0 else nbs)
-            for k in range(2):
-                for l in range(2):
-                    t33[k, l] -= wa * (Z[k, l] + Z[l, k])
+        bubble_point_stiffness_into(s, g, F, T, d, da, co, nb, nbr, nbs, G, HfG, au, bw, X, v3, w3, csum, M,
+                                    Z, t33)
         k00 += t33[0, 0]
         k01 += t33[0, 1]
         k10 += t33[1, 0]
