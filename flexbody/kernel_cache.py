@@ -49,7 +49,7 @@ PACKAGE = Path(__file__).resolve().parent
 #: the modules that define numba kernels: the digest covers them and everything they import from flexbody
 #: (tests/test_kernel_cache.py checks that no other module of the package uses numba's jit)
 KERNEL_MODULES = ("flexbody._numba", "flexbody.lie.kernels", "flexbody.scatter", "flexbody.shell.element",
-                  "flexbody.shell.element_bubble")
+                  "flexbody.shell.kernels.mitc7.loops")
 
 
 def module_file(name: str, root: Path = PACKAGE) -> Path | None:

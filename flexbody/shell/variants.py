@@ -15,7 +15,7 @@ A variant is a small frozen dataclass that carries its metadata and its two kern
   ``forces``, ``mixed_forces``, ``stress_forces``, ``linearized_strains``, ``strains``, ``strain_energy``,
   ``warm_up``, each with the readable numpy kernel (:mod:`flexbody.shell.element_reference`,
   :mod:`flexbody.shell.bubble`) or the numba kernel (:mod:`flexbody.shell.element`,
-  :mod:`flexbody.shell.element_bubble`), as the batch's ``kernel`` says; and the readable kernel for one
+  :mod:`flexbody.shell.kernels.mitc7`), as the batch's ``kernel`` says; and the readable kernel for one
   element (``element_force_tangent``, ``element_strains``, ``element_strain_energy``).
 
 The variants:
@@ -45,10 +45,12 @@ from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
-from flexbody.shell import bubble, element_bubble, element_reference
+from flexbody.shell import bubble, element_reference
 from flexbody.shell.element import (CompressedMaps, compress_maps, element_strains_batch,
                                     internal_force_tangent_batch, linearized_strains_batch)
 from flexbody.shell.geometry import N_GAUSS, ElementGeometry
+from flexbody.shell.kernels.mitc7.loops import condensed_force_tangent_batch
+from flexbody.shell.kernels.mitc7.maps import MapNonzeros, map_nonzeros
 from flexbody.shell.mitc6 import DEFAULT_SCHEME, MEMBRANE_SCHEMES
 
 #: The values of the scene files' ``tying`` key (:func:`variant_from_key`), besides true and false.
@@ -341,9 +343,10 @@ class MITC7:
         return bubble.MITC7_MAPS
 
     @cached_property
-    def compressed_maps(self) -> element_bubble.MapNonzeros:
-        """The numba kernel's form of ``maps`` (:class:`flexbody.shell.element_bubble.MapNonzeros`), built once."""
-        return element_bubble.map_nonzeros(self.maps)
+    def compressed_maps(self) -> MapNonzeros:
+        """The numba kernel's form of ``maps`` (:class:`flexbody.shell.kernels.mitc7.maps.MapNonzeros`), built
+        once."""
+        return map_nonzeros(self.maps)
 
     def element_state(self, n_elements: int) -> np.ndarray:
         """The rotation bubbles b (m, 2), zero: the warm start of the first evaluation."""
@@ -359,8 +362,8 @@ class MITC7:
         (a non-finite residual stops Newton) and keeps its start value."""
         bubbles = batch.element_state
         if batch.kernel == "numba":
-            f, K, b = element_bubble.condensed_force_tangent_batch(*batch.fast_arrays(), self.compressed_maps,
-                                                                   bubbles, want_tangent)
+            f, K, b = condensed_force_tangent_batch(*batch.fast_arrays(), self.compressed_maps, bubbles,
+                                                    want_tangent)
             bubbles[...] = b
             return f, (K if want_tangent else None)
         m = len(batch)
@@ -405,8 +408,8 @@ class MITC7:
     def warm_up(self, batch: ElementBatch) -> None:
         """Compile (or load) the numba kernels this variant uses, on the batch (one element is enough)."""
         for want_tangent in (True, False):
-            element_bubble.condensed_force_tangent_batch(*batch.fast_arrays(), self.compressed_maps,
-                                                         np.zeros((len(batch), 2)), want_tangent)
+            condensed_force_tangent_batch(*batch.fast_arrays(), self.compressed_maps, np.zeros((len(batch), 2)),
+                                          want_tangent)
 
     # -- one element, readable kernel ---------------------------------------------------------------------
     def element_force_tangent(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,

@@ -1,10 +1,11 @@
-"""The numba MITC7 kernel (element_bubble) against its numpy twin (element_reference + bubble), to 1e-12."""
+"""The numba MITC7 kernels (flexbody.shell.kernels.mitc7) against their numpy twin (element_reference +
+bubble), to 1e-12."""
 
 import numpy as np
 import pytest
 
 from flexbody.shell.bubble import condensed_bubble, condensed_force_tangent
-from flexbody.shell.element_bubble import condensed_force_tangent_batch
+from flexbody.shell.kernels.mitc7.loops import condensed_force_tangent_batch
 from flexbody.shell.variants import MITC7
 from tests.shell.conftest import deformed
 
@@ -101,10 +102,10 @@ def test_a_non_finite_start_is_retried_from_zero(element):
 def test_unconverged_bubble_gives_nan_force_and_keeps_the_start(element, monkeypatch):
     """Newton on b out of iterations (here: one evaluation allowed, from a start away from b*): NaN force
     and tangent, the start value returned as b."""
-    from flexbody.shell import element_bubble
+    from flexbody.shell.kernels.mitc7 import loops
     x, fr, geo, C, _ = batch_of(element)
     _, _, b1 = run(x, fr, geo, C, None)
-    monkeypatch.setattr(element_bubble, "BUBBLE_MAX_ITERATIONS", 1)
+    monkeypatch.setattr(loops, "BUBBLE_MAX_ITERATIONS", 1)
     start = b1.copy()
     start[0] += 0.1
     f, K, b = run(x, fr, geo, C, start)
