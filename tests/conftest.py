@@ -29,5 +29,5 @@ def small_disk(tmp_path):
 def terminal_stderr(monkeypatch):
     """``flexbody run`` prints its step lines only when stderr is a terminal: tests that read them from the
     captured (not a terminal) stderr pretend it is one."""
-    import flexbody.cli
-    monkeypatch.setattr(flexbody.cli, "_stderr_is_terminal", lambda: True)
+    import flexbody.cli.progress
+    monkeypatch.setattr(flexbody.cli.progress, "stderr_is_terminal", lambda: True)

@@ -392,7 +392,8 @@ def is_concrete(text: str) -> bool:
 
 
 def check_flexbody_command(command: ShownCommand) -> None:
-    from flexbody.cli import _check_sweep_keys, _open
+    from flexbody.cli.scene_input import open_source
+    from flexbody.cli.sweep import check_sweep_keys
     words = _words(command.text)
     parser = build_parser()
     sub = _subparsers(parser)
@@ -406,7 +407,7 @@ def check_flexbody_command(command: ShownCommand) -> None:
                     assert option in known, f"{command.where}: {command.text}: no option {option}"
         keys = [k for k in _keys_of("--set", words) + _keys_of("--grid", words) if not PLACEHOLDER.search(k)]
         if len(words) > 1 and keys and _scene_exists(words[1]) and words[1] not in WRITTEN_BY_THE_DOC:
-            _check_sweep_keys(_open(str(ROOT / words[1]) if (ROOT / words[1]).is_file() else words[1]), keys)
+            check_sweep_keys(open_source(str(ROOT / words[1]) if (ROOT / words[1]).is_file() else words[1]), keys)
         return                                           # e.g. a real scene with a placeholder address
     try:
         args = parser.parse_args(words)
@@ -419,9 +420,9 @@ def check_flexbody_command(command: ShownCommand) -> None:
         keys = _keys_of("--set", words) + _keys_of("--grid", words)
         if keys and scene not in WRITTEN_BY_THE_DOC:
             if not (ROOT / scene).is_file():
-                _check_sweep_keys(_open(scene), keys)
+                check_sweep_keys(open_source(scene), keys)
             else:
-                _check_sweep_keys(_open(str(ROOT / scene)), keys)
+                check_sweep_keys(open_source(str(ROOT / scene)), keys)
 
 
 def check_script_command(command: ShownCommand, helps: dict) -> None:

@@ -10,7 +10,8 @@ from types import SimpleNamespace
 import numba
 import pytest
 
-from flexbody.cli import _Progress, main
+from flexbody.cli import main
+from flexbody.cli.progress import Progress
 from flexbody.scenes.scene import CompileNotice, warm_up_kernels
 
 STATIC = ["cantilever_end_shear", "--set", "nx=2", "--set", "steps=3"]
@@ -51,7 +52,7 @@ def test_warm_up_of_ready_kernels_says_they_were_loaded():
 
 
 def test_progress_clock_starts_when_the_kernels_are_ready(capsys):
-    progress = _Progress()
+    progress = Progress()
     progress.t0 -= 100.0                   # as if compiling had taken 100 s
     progress.notify(CompileNotice("compiling"))
     progress(SimpleNamespace(step=1, load_factor=0.5, iterations=3))

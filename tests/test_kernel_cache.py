@@ -138,7 +138,7 @@ def test_an_edit_of_any_kernel_source_changes_the_digest_and_nothing_else_does(t
         (copy / name).write_bytes(original.replace(b"\n", b"\n\n", 1))
         assert kernel_cache.sources_digest(copy) != digest, name
         (copy / name).write_bytes(original)
-    for name in ("cli.py", "body.py", "outputs/__init__.py"):
+    for name in ("cli/run.py", "body.py", "outputs/__init__.py"):
         (copy / name).write_text((copy / name).read_text() + "\n# an edit\n")
     assert kernel_cache.sources_digest(copy) == digest
 

@@ -14,7 +14,8 @@ import pytest
 from flexbody.assembly import Model
 from flexbody.body import ShellBody
 from flexbody.buckling import geometric_stiffness, linear_buckling, nodal_translations
-from flexbody.cli import cmd_buckling, stability_lines
+from flexbody.cli.buckling import cmd_buckling
+from flexbody.cli.summary import stability_lines
 from flexbody.constraints import Fix
 from flexbody.loads import NodalLoad
 from flexbody.mesh import generators

@@ -47,9 +47,10 @@ def screenshot_blueprint(scene: str, params: list[str], path: Path) -> None:
     """The recording's blueprint with the time panel following the last step, saved as a .rbl file."""
     import rerun.blueprint as rrb
 
-    from flexbody.cli import _build, _open, _parse_sets
+    from flexbody.cli.scene_input import build_scene, open_source
+    from flexbody.cli.values import parse_sets
     from flexbody.outputs.rerun_log import TIMELINES, blueprint
-    built = _build(_open(scene), _parse_sets(params))
+    built = build_scene(open_source(scene), parse_sets(params))
     references = tuple(built.reference.values) if built.reference is not None else ()
     layout = blueprint([o.name for o in built.outputs], built.kind, references)
     timeline = TIMELINES[built.kind]
