@@ -57,9 +57,9 @@ import numpy as np
 from flexbody import _numba
 from flexbody.chunks import n_chunks, run_chunks
 from flexbody.lie import kernels as lk
-from flexbody.shell.bubble import BUBBLE_MAX_ITERATIONS, BUBBLE_TOL, bubble_step
+from flexbody.shell.bubble_newton import BUBBLE_MAX_ITERATIONS, BUBBLE_TOL, bubble_step
 from flexbody.shell.element import _element_arrays
-from flexbody.shell.element_reference import EVAL_DNB, EVAL_NB
+from flexbody.shell.geometry import EVAL_DNB, EVAL_NB
 from flexbody.shell.geometry import EVAL_DN, EVAL_N, N_GAUSS
 
 NDOF = 36
