@@ -146,7 +146,7 @@ class ShellBody:
         self.origin = model_origin(self.mesh.nodes)
         self.reference = build_reference(self.mesh, self.frames0, self.origin)
         # the variant's per-element state (MITC7: the condensed bubbles of the last evaluation, the warm start
-        # of the next one; the results do not depend on it beyond the bubble tolerance, flexbody.shell.bubble)
+        # of the next one; the results do not depend on it beyond the bubble tolerance, flexbody.shell.reference.bubble)
         self._element_state = self.element.element_state(self.mesh.n_elements)
 
     @property
@@ -187,7 +187,7 @@ class ShellBody:
         """The mixed Newton iteration's element terms for given Gauss-point stress resultants (m, 7, 8):
         the internal forces of the strains f (m, 36), the iteration matrices K (m, 36, 36), whose
         geometric terms carry the given stresses, and the forces of these stresses f_stress (m, 36)
-        (:func:`flexbody.shell.element_reference.force_tangent`). MITC6 variants only."""
+        (:func:`flexbody.shell.reference.loops.force_tangent`). MITC6 variants only."""
         batch = self._batch(state)
         if not self.element.supports_mixed_iteration:
             return self.element.mixed_forces(batch, stress)          # raises: says why

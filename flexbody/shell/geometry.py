@@ -14,9 +14,10 @@ import numpy as np
 
 from flexbody.lie import so3
 from flexbody.shell import mitc6
-from flexbody.shell.kinematics import (covariant_strains, covariant_strains_many, point_kinematics,
-                                       relative_rotations)
-from flexbody.shell.shape import gauss_triangle_7, shape_derivatives, shape_functions
+from flexbody.shell.reference.points import (covariant_strains, covariant_strains_many, point_kinematics,
+                                             relative_rotations)
+from flexbody.shell.shape import (bubble_derivatives, bubble_function, gauss_triangle_7, shape_derivatives,
+                                  shape_functions)
 
 GAUSS_POINTS, GAUSS_WEIGHTS = gauss_triangle_7()
 #: Evaluation points of an element: the MITC6 tying points first, then the Gauss points.
@@ -25,6 +26,9 @@ N_GAUSS = len(GAUSS_POINTS)
 GAUSS_OFFSET = mitc6.N_TYING
 EVAL_N = np.array([shape_functions(r, s) for r, s in EVAL_POINTS])
 EVAL_DN = np.array([shape_derivatives(r, s) for r, s in EVAL_POINTS])
+#: The rotation bubble N_b = 27 r s t of MITC7 and its derivatives at the evaluation points: (17,), (17, 2).
+EVAL_NB = np.array([bubble_function(r, s) for r, s in EVAL_POINTS])
+EVAL_DNB = np.array([bubble_derivatives(r, s) for r, s in EVAL_POINTS])
 assert np.array_equal(EVAL_POINTS[GAUSS_OFFSET:], mitc6._GAUSS_POINTS) and len(EVAL_POINTS) == mitc6.N_EVAL
 #: Membrane maps per scheme (mitc6.MEMBRANE_SCHEMES), over all evaluation points: (7, 3, 17, 3) each.
 MEMBRANE_MAPS = {scheme: np.array([mitc6.membrane_map(r, s, scheme) for r, s in GAUSS_POINTS])

@@ -5,7 +5,7 @@ A variant is a small frozen dataclass that carries its metadata and its two kern
 
 * ``name``: the variant for reports ("MITC6", "MITC6 (point membrane tying)", "MITC7", "no tying");
 * ``key``: the value of the scene files' ``tying`` key that names it (:func:`variant_from_key`);
-* ``maps``: its assumed-strain map A (7, 8, 17, 8) (:func:`flexbody.shell.element_reference.assumed_strain_maps`)
+* ``maps``: its assumed-strain map A (7, 8, 17, 8) (:func:`flexbody.shell.reference.material.assumed_strain_maps`)
   and ``compressed_maps``, the numba kernel's form of it, both built once per object and cached on it;
 * its capabilities, as attributes: ``supports_mixed_iteration`` (the iteration matrix with given
   Gauss-point stresses), ``supports_stress_forces`` (forces of given stresses), ``supports_linearized_stresses``
@@ -13,8 +13,8 @@ A variant is a small frozen dataclass that carries its metadata and its two kern
   element by element, kept between evaluations as the warm start: :meth:`ElementVariant.element_state`);
 * the element computations the body calls, on an :class:`ElementBatch` (all elements of a body in one state):
   ``forces``, ``mixed_forces``, ``stress_forces``, ``linearized_strains``, ``strains``, ``strain_energy``,
-  ``warm_up``, each with the readable numpy kernel (:mod:`flexbody.shell.element_reference`,
-  :mod:`flexbody.shell.bubble`) or the numba kernel (:mod:`flexbody.shell.element`,
+  ``warm_up``, each with the readable numpy kernel (:mod:`flexbody.shell.reference.loops`,
+  :mod:`flexbody.shell.reference.bubble`) or the numba kernel (:mod:`flexbody.shell.element`,
   :mod:`flexbody.shell.kernels.mitc7`), as the batch's ``kernel`` says; and the readable kernel for one
   element (``element_force_tangent``, ``element_strains``, ``element_strain_energy``).
 
@@ -28,7 +28,7 @@ variant                        element                                          
 ``MITC6(membrane="point")``    MITC6 with the point-value membrane tying (locks in membrane-bending   ``"point"``
                                coupled thin shells: kept for comparison, docs/locking.md)
 ``MITC7()``                    MITC6 plus a condensed rotation bubble and the canonical shear tying   ``"mitc7"``
-                               (:mod:`flexbody.shell.bubble`): converges faster in bending, costs
+                               (:mod:`flexbody.shell.reference.bubble`): converges faster in bending, costs
                                about four MITC6 elements; no mixed iteration
 ``NoTying()``                  displacement-based strains (locks; for comparison)                     ``false``
 =============================  =====================================================================  ==========
@@ -45,7 +45,8 @@ from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
-from flexbody.shell import bubble, element_reference
+from flexbody.shell.reference import bubble, loops
+from flexbody.shell.reference.material import assumed_strain_maps
 from flexbody.shell.element import (CompressedMaps, compress_maps, element_strains_batch,
                                     internal_force_tangent_batch, linearized_strains_batch)
 from flexbody.shell.geometry import N_GAUSS, ElementGeometry
@@ -198,8 +199,7 @@ class _AssumedStrains:
         f = np.zeros((m, 36))
         K = np.zeros((m, 36, 36)) if want_tangent else None
         for e in range(m):
-            fe, Ke = element_reference.force_tangent(batch.x[e], batch.frames[e], batch.geometry(e),
-                                                     batch.section, self.maps)
+            fe, Ke = loops.force_tangent(batch.x[e], batch.frames[e], batch.geometry(e), batch.section, self.maps)
             f[e] = fe
             if want_tangent:
                 K[e] = Ke
@@ -210,8 +210,8 @@ class _AssumedStrains:
         (m, 36), the iteration matrices (m, 36, 36), the forces of the given stresses (m, 36)."""
         if batch.kernel == "numba":
             return internal_force_tangent_batch(*batch.fast_arrays(), self.compressed_maps, True, stress)
-        parts = [element_reference.force_tangent(batch.x[e], batch.frames[e], batch.geometry(e), batch.section,
-                                                 self.maps, stress=stress[e]) for e in range(len(batch))]
+        parts = [loops.force_tangent(batch.x[e], batch.frames[e], batch.geometry(e), batch.section,
+                                     self.maps, stress=stress[e]) for e in range(len(batch))]
         return tuple(np.array([p[k] for p in parts]) for k in range(3))
 
     def stress_forces(self, batch: ElementBatch, stress: np.ndarray) -> np.ndarray:
@@ -226,8 +226,8 @@ class _AssumedStrains:
             return linearized_strains_batch(batch.x, batch.frames, batch.e_ref, batch.to_cart,
                                             self.compressed_maps, dh)
         m = len(batch)
-        pairs = [element_reference.linearized_strains(batch.x[e], batch.frames[e], batch.geometry(e), dh[e],
-                                                      self.maps) for e in range(m)]
+        pairs = [loops.linearized_strains(batch.x[e], batch.frames[e], batch.geometry(e), dh[e], self.maps)
+                 for e in range(m)]
         return (np.array([p[0] for p in pairs]).reshape(m, N_GAUSS, 8),
                 np.array([p[1] for p in pairs]).reshape(m, N_GAUSS, 8))
 
@@ -243,8 +243,7 @@ class _AssumedStrains:
             return _energy(batch.weights, eps, batch.section)
         total = 0.0
         for e in range(len(batch)):
-            total += element_reference.strain_energy(batch.x[e], batch.frames[e], batch.geometry(e),
-                                                     batch.section, self.maps)
+            total += loops.strain_energy(batch.x[e], batch.frames[e], batch.geometry(e), batch.section, self.maps)
         return total
 
     def warm_up(self, batch: ElementBatch) -> None:
@@ -260,24 +259,24 @@ class _AssumedStrains:
     def element_force_tangent(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
                               section: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Internal force (36,) and tangent (36, 36) of one element (numpy reference)."""
-        return element_reference.force_tangent(x, frames, geom, section, self.maps)
+        return loops.force_tangent(x, frames, geom, section, self.maps)
 
     def element_strains(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
                         bubble: np.ndarray | None = None) -> np.ndarray:
         """Cartesian strains (7, 8) at the Gauss points of one element (numpy reference; no bubble)."""
         if bubble is not None:
             raise ValueError(f"{self!r} has no rotation bubble, got bubble={bubble!r}")
-        return element_reference.element_strains(x, frames, geom, self.maps)
+        return loops.element_strains(x, frames, geom, self.maps)
 
     def element_linearized_strains(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
                                    dh: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Strains (7, 8) of one element and their linearization B_g dh along dh (36,) or (36, k)."""
-        return element_reference.linearized_strains(x, frames, geom, dh, self.maps)
+        return loops.linearized_strains(x, frames, geom, dh, self.maps)
 
     def element_strain_energy(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
                               section: np.ndarray) -> float:
         """Elastic energy of one element (numpy reference)."""
-        return element_reference.strain_energy(x, frames, geom, section, self.maps)
+        return loops.strain_energy(x, frames, geom, section, self.maps)
 
 
 @dataclass(frozen=True)
@@ -306,7 +305,7 @@ class MITC6(_AssumedStrains):
     @cached_property
     def maps(self) -> np.ndarray:
         """The assumed-strain map A (7, 8, 17, 8) (read-only)."""
-        return _read_only(element_reference.assumed_strain_maps(self.membrane, "mitc6"))
+        return _read_only(assumed_strain_maps(self.membrane, "mitc6"))
 
 
 @dataclass(frozen=True)
@@ -319,13 +318,13 @@ class NoTying(_AssumedStrains):
     @cached_property
     def maps(self) -> np.ndarray:
         """The assumed-strain map A (7, 8, 17, 8): the Gauss points' own strains (read-only)."""
-        return _read_only(element_reference.assumed_strain_maps(None, None))
+        return _read_only(assumed_strain_maps(None, None))
 
 
 @dataclass(frozen=True)
 class MITC7:
     """MITC7: MITC6 plus a cubic rotation bubble, condensed element by element, and the canonical shear tying
-    (:mod:`flexbody.shell.bubble`; membrane: the default scheme). The bubbles of the last evaluation are the
+    (:mod:`flexbody.shell.reference.bubble`; membrane: the default scheme). The bubbles of the last evaluation are the
     warm start of the next (the results do not depend on it beyond the bubble tolerance). It has no mixed
     iteration, no forces of given stresses and no linearized stresses: its bubble is condensed against the
     strains' own stresses."""
@@ -339,7 +338,7 @@ class MITC7:
 
     @property
     def maps(self) -> np.ndarray:
-        """The assumed-strain map A (7, 8, 17, 8) (read-only, :data:`flexbody.shell.bubble.MITC7_MAPS`)."""
+        """The assumed-strain map A (7, 8, 17, 8) (read-only, :data:`flexbody.shell.reference.bubble.MITC7_MAPS`)."""
         return bubble.MITC7_MAPS
 
     @cached_property
@@ -420,10 +419,10 @@ class MITC7:
     def element_strains(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
                         bubble: np.ndarray | None = None) -> np.ndarray:
         """Cartesian strains (7, 8) at the Gauss points of one element for the rotation bubble b (2,)
-        (:func:`flexbody.shell.bubble.condensed_bubble`)."""
+        (:func:`flexbody.shell.reference.bubble.condensed_bubble`)."""
         if bubble is None:
             raise ValueError("MITC7 strains need the rotation bubble: pass bubble=condensed_bubble(...)")
-        return element_reference.element_strains(x, frames, geom, self.maps, bubble)
+        return loops.element_strains(x, frames, geom, self.maps, bubble)
 
     def element_linearized_strains(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
                                    dh: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -434,7 +433,7 @@ class MITC7:
                               section: np.ndarray) -> float:
         """Elastic energy of one element at its condensed bubble (numpy reference)."""
         b = bubble.condensed_bubble(x, frames, geom, section)
-        return element_reference.strain_energy(x, frames, geom, section, self.maps, b)
+        return loops.strain_energy(x, frames, geom, section, self.maps, b)
 
 
 def variant_from_key(value: object, name: str = "tying") -> ElementVariant:

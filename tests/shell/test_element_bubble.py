@@ -1,10 +1,10 @@
-"""The numba MITC7 kernels (flexbody.shell.kernels.mitc7) against their numpy twin (element_reference +
-bubble), to 1e-12."""
+"""The numba MITC7 kernels (flexbody.shell.kernels.mitc7) against their numpy twin (flexbody.shell.reference:
+loops + bubble), to 1e-12."""
 
 import numpy as np
 import pytest
 
-from flexbody.shell.bubble import condensed_bubble, condensed_force_tangent
+from flexbody.shell.reference.bubble import condensed_bubble, condensed_force_tangent
 from flexbody.shell.kernels.mitc7.loops import condensed_force_tangent_batch
 from flexbody.shell.variants import MITC7
 from tests.shell.conftest import deformed

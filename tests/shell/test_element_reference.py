@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from flexbody.lie import so3
-from flexbody.shell.bubble import condensed_bubble
-from flexbody.shell.element_reference import force_tangent
+from flexbody.shell.reference.bubble import condensed_bubble
+from flexbody.shell.reference.loops import force_tangent
 from flexbody.shell.variants import MITC6, MITC7, NoTying
 from tests.shell.conftest import deformed
 
@@ -56,9 +56,9 @@ def test_tangent_check_detects_a_wrong_geometric_term(element, monkeypatch):
     """The finite-difference check must be able to fail: drop one term of the second variation."""
     X, frames, geom, C = element
     x, fr = deformed(X, frames, np.random.default_rng(3))
-    from flexbody.shell import kinematics
-    original = kinematics.so3.d2_tangent
-    monkeypatch.setattr(kinematics.so3, "d2_tangent", lambda d, a, b: 1.1 * original(d, a, b))
+    from flexbody.shell.reference import geometric
+    original = geometric.so3.d2_tangent
+    monkeypatch.setattr(geometric.so3, "d2_tangent", lambda d, a, b: 1.1 * original(d, a, b))
     assert tangent_error(x, fr, geom, C, MITC6()) > 1e-6
 
 

@@ -83,7 +83,7 @@ def test_without_tying_the_plate_locks():
 
 
 def test_mitc7_plate_converges_at_the_optimal_rate():
-    """The rotation bubble with the canonical shear tying (MITC7, flexbody.shell.bubble) on the clamped plate.
+    """The rotation bubble with the canonical shear tying (MITC7, flexbody.shell.reference.bubble) on the clamped plate.
 
     Measured, h/a = 1e-3, centre deflection / Kirchhoff: 2x4x4 0.94446, 2x8x8 0.99496, 2x16x16 0.99962,
     2x32x32 0.99999 (errors / 11, / 13, / 40) against MITC6's 1.0186, 1.0097, 1.0041, 1.0018 (about O(h)).

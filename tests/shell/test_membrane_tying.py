@@ -11,7 +11,7 @@ import scipy.sparse.linalg as spla
 
 from flexbody.scenes import build
 from flexbody.shell import mitc6
-from flexbody.shell.element_reference import assumed_strain_maps
+from flexbody.shell.reference.material import assumed_strain_maps
 from flexbody.shell.geometry import EVAL_POINTS, GAUSS_POINTS, GAUSS_WEIGHTS, MEMBRANE_MAPS
 from flexbody.shell.variants import MITC6
 

@@ -14,7 +14,7 @@ from flexbody.body import ShellBody
 from flexbody.dynamics import DynamicModel
 from flexbody.mesh import generators
 from flexbody.shell import element
-from flexbody.shell.element_reference import assumed_strain_maps
+from flexbody.shell.reference.material import assumed_strain_maps
 from flexbody.shell.kernels.mitc7 import maps as mitc7_maps
 from flexbody.shell.material import ShellMaterial
 from flexbody.shell.variants import MITC6, MITC7, VARIANT_KEYS, ElementVariant, NoTying, variant_from_key

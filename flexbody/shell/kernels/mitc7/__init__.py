@@ -2,9 +2,9 @@
 :mod:`flexbody.shell.kernels`: the condensed MITC7 element (rotation bubble) for a batch of elements.
 
 Computes, element by element, exactly what the readable numpy twin computes:
-:func:`flexbody.shell.element_reference.force_tangent` with ``bubble=b`` (the 38-component augmented force
+:func:`flexbody.shell.reference.loops.force_tangent` with ``bubble=b`` (the 38-component augmented force
 and tangent, the last two components for the bubble amplitudes b) and
-:func:`flexbody.shell.bubble.condensed_force_tangent` (Newton on b, then static condensation)::
+:func:`flexbody.shell.reference.bubble.condensed_force_tangent` (Newton on b, then static condensation)::
 
     r_b(b*) = 0  (Newton on the 2 x 2 block, from the warm start b0),
     f = r_n(b*),     K = K_nn - K_nb K_bb^-1 K_bn.

@@ -4,7 +4,7 @@ then the condensed tangent::
     r_b(b*) = 0  (Newton on the 2 x 2 block, from the warm start b0),
     f = r_n(b*),     K = K_nn - K_nb K_bb^-1 K_bn.
 
-Convergence of the bubble: the safeguarded Newton step of :func:`flexbody.shell.bubble.bubble_step` (the
+Convergence of the bubble: the safeguarded Newton step of :func:`flexbody.shell.bubble_newton.bubble_step` (the
 same function, compiled), from the warm start b0 and, if that fails, from b = 0, until the correction is
 <= ``BUBBLE_TOL (1 + |b|_inf)``; that last correction is applied and the force and tangent are evaluated
 at the final b, as in the reference. If it does not converge within ``BUBBLE_MAX_ITERATIONS`` evaluations,
@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexbody import _numba
-from flexbody.shell.bubble import bubble_step
+from flexbody.shell.bubble_newton import bubble_step
 from flexbody.shell.kernels.mitc7.augmented import evaluate_bubble
 from flexbody.shell.kernels.mitc7.points import NDOF
 
@@ -34,7 +34,7 @@ compiled_bubble_step = plain(bubble_step)
 def solve_bubble(e, b0, b, x, fr, dn, e_ref, to_cart, weights, C, a_ptr, a_i, a_p, a_j, a_v, used,
                  EN, EDN, ENB, EDNB, tol, max_iter, zs, ws, fa, Ka):
     """Newton on element e's bubble b (2,), in place, from b0[e] and, if that fails, from b = 0 (as
-    :func:`flexbody.shell.bubble.condense`). True if it converged (module docstring)."""
+    :func:`flexbody.shell.reference.bubble.condense`). True if it converged (module docstring)."""
     converged = False
     warm = b0[e, 0] != 0.0 or b0[e, 1] != 0.0
     for attempt in range(2 if warm else 1):   # from the warm start, then from b = 0

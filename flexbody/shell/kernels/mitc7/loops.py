@@ -15,7 +15,7 @@ import numpy as np
 
 from flexbody import _numba
 from flexbody.chunks import n_chunks, run_chunks
-from flexbody.shell.bubble import BUBBLE_MAX_ITERATIONS, BUBBLE_TOL
+from flexbody.shell.bubble_newton import BUBBLE_MAX_ITERATIONS, BUBBLE_TOL
 from flexbody.shell.element import _element_arrays
 from flexbody.shell.geometry import N_GAUSS
 from flexbody.shell.kernels.mitc7.augmented import evaluate_z, workspace, zspace
@@ -85,8 +85,8 @@ def condensed_force_tangent_batch(x_el: np.ndarray, fr_el: np.ndarray, e_ref: np
                                   want_tangent: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Condensed MITC7 force (m, 36), tangent (m, 36, 36) and bubble amplitudes (m, 2) of m elements.
 
-    Element by element the result of :func:`flexbody.shell.bubble.condensed_force_tangent` (force and
-    tangent, per node [u, theta] in the nodal local frames) and :func:`flexbody.shell.bubble.condensed_bubble`
+    Element by element the result of :func:`flexbody.shell.reference.bubble.condensed_force_tangent` (force and
+    tangent, per node [u, theta] in the nodal local frames) and :func:`flexbody.shell.reference.bubble.condensed_bubble`
     (b), to 1e-12 relative.
 
     Parameters

@@ -12,7 +12,7 @@ import numpy as np
 
 from flexbody import _numba
 from flexbody.lie import kernels as lk
-from flexbody.shell.element_reference import EVAL_DNB, EVAL_NB
+from flexbody.shell.geometry import EVAL_DNB, EVAL_NB
 from flexbody.shell.geometry import EVAL_DN, EVAL_N, N_GAUSS
 
 #: the element's nodal motions (6 nodes x [u, theta])

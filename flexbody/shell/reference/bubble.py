@@ -1,4 +1,5 @@
-"""The rotation bubble of the MITC7 shell, condensed element by element (numpy reference).
+"""The rotation bubble of the MITC7 shell, condensed element by element (readable numpy twin of
+:mod:`flexbody.shell.kernels.mitc7`).
 
 MITC6 (quadratic positions and rotations, MITC6a shear) converges at only about O(h) in the thin limit:
 its shear space, the rotated Raviart-Thomas space of index 1, is tied partly by point values and the
@@ -13,7 +14,8 @@ On the SE(3) shell the bubble enters the relative rotation of paper Eq. 30:
 
 b an element unknown: a rotation about the in-plane axes of the reference node's frame, so rigid motions
 leave it unchanged and the element stays invariant. b is not a global unknown: for a given nodal state it
-is solved from its own equilibrium r_b(b) = 0 (Newton on the 2 x 2 block), and the element returns
+is solved from its own equilibrium r_b(b) = 0 (Newton on the 2 x 2 block,
+:func:`flexbody.shell.bubble_newton.bubble_step`), and the element returns
 
     f = r_n(b*),    K = K_nn - K_nb K_bb^-1 K_bn,
 
@@ -25,53 +27,21 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexbody.shell.element_reference import assumed_strain_maps, force_tangent
+from flexbody.shell.bubble_newton import BUBBLE_MAX_ITERATIONS, BUBBLE_TOL, bubble_step
 from flexbody.shell.geometry import ElementGeometry
-from flexbody.shell.kinematics import NDOF
 from flexbody.shell.mitc6 import DEFAULT_SCHEME
+from flexbody.shell.reference.loops import force_tangent
+from flexbody.shell.reference.material import assumed_strain_maps
+from flexbody.shell.reference.points import NDOF
 
 #: MITC7's assumed-strain map: the default membrane scheme, the canonical shear tying (read-only).
 MITC7_MAPS = assumed_strain_maps(DEFAULT_SCHEME, "mitc7")
 MITC7_MAPS.flags.writeable = False
 
-#: Newton on the bubble stops when its correction is below this (b is an angle).
-BUBBLE_TOL = 1e-13
-BUBBLE_MAX_ITERATIONS = 25
-#: Largest bubble correction per Newton step, in radians (max-norm).
-BUBBLE_STEP_CAP = 0.3
 
-
-def bubble_step(g0: float, g1: float, h00: float, h01: float, h10: float, h11: float) -> tuple[float, float]:
-    """The safeguarded Newton correction of the bubble for its force g and its 2 x 2 block H.
-
-    b* minimises the element energy over b. Where H is positive definite (always near a minimum) this is
-    the Newton step -H^-1 g. Elsewhere (a far-off trial state under large compression) H is replaced by
-    |H| = (H^2 + |det H| I) / sqrt(tr H^2 + 2 |det H|), the matrix with H's eigenvectors and the absolute
-    values of its eigenvalues, which gives a descent direction. The step is capped at BUBBLE_STEP_CAP.
-    Scalar arithmetic only, so that the numba kernel compiles this same function.
-    """
-    a, b, c = h00, 0.5 * (h01 + h10), h11
-    det = a * c - b * b
-    if not (det > 0.0 and a + c > 0.0):
-        ad = abs(det)
-        scale = (a * a + 2.0 * b * b + c * c + 2.0 * ad) ** 0.5
-        floor = 1e-12 * (abs(a) + abs(c) + 2.0 * abs(b))
-        a, b, c = ((a * a + b * b + ad) / scale + floor, (a + c) * b / scale,
-                   (b * b + c * c + ad) / scale + floor)
-        det = a * c - b * b
-        h01 = h10 = b
-    else:
-        a, c = h00, h11
-        det = a * c - h01 * h10
-    d0 = -(c * g0 - h01 * g1) / det
-    d1 = -(a * g1 - h10 * g0) / det
-    big = max(abs(d0), abs(d1))
-    if big > BUBBLE_STEP_CAP:
-        d0, d1 = d0 * BUBBLE_STEP_CAP / big, d1 * BUBBLE_STEP_CAP / big
-    return d0, d1
-
-
-def _augmented(x, frames, geom, section, b):
+def augmented_force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,
+                            b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Force (38,) and tangent (38, 38) of the element with the bubble b (2,) as two more unknowns."""
     return force_tangent(x, frames, geom, section, MITC7_MAPS, b)
 
 
@@ -93,14 +63,14 @@ def _solve(x, frames, geom, section, b0=None):
 
 def _newton(x, frames, geom, section, b):
     for _ in range(BUBBLE_MAX_ITERATIONS):
-        f, K = _augmented(x, frames, geom, section, b)
+        f, K = augmented_force_tangent(x, frames, geom, section, b)
         db = np.array(bubble_step(f[NDOF], f[NDOF + 1], K[NDOF, NDOF], K[NDOF, NDOF + 1], K[NDOF + 1, NDOF],
                                   K[NDOF + 1, NDOF + 1]))
         if not np.all(np.isfinite(db)):
             break
         b = b + db
         if np.abs(db).max() <= BUBBLE_TOL * (1.0 + np.abs(b).max()):
-            f, K = _augmented(x, frames, geom, section, b)  # at the final b: r_b's error ~ |db|^2, round-off
+            f, K = augmented_force_tangent(x, frames, geom, section, b)  # at the final b: r_b's error ~ |db|^2
             return b, f, K
     raise FloatingPointError(f"the rotation bubble did not converge (last correction {np.abs(db).max():.3e})")
 
