@@ -10,14 +10,7 @@ Decorators (all cached in :data:`flexbody.kernel_cache.CACHE_DIR` when it is usa
   numpy's error model (a division by zero gives inf/nan, no exception check), FMA contraction allowed
   (results agree with the numpy reference to round-off), no reference counting (``_nrt=False``; otherwise
   every array argument costs an atomic incref/decref per call) and ``noalias`` array arguments (below).
-- :data:`inline`: the small helpers of the point loops. A helper is compiled once per signature, as a
-  separate numba function with :data:`INLINE_FLAGS` (the floating-point flags of :data:`fast`; no cache entry,
-  no Python or C wrapper: only jit code calls it), and LLVM inlines it into each :data:`fast` or :data:`entry`
-  caller (numba's ``forceinline``: the LLVM ``alwaysinline`` attribute). Inlining at numba-IR level instead
-  (numba's ``inline="always"``) types and lowers the whole helper tree again in every caller: it cost the
-  default scene's first run about a third of its compilation. Into a caller with other floating-point flags
-  (a :data:`plain` one) a helper is still inlined at numba-IR level, so that it computes with its caller's
-  flags, as before (FMA contraction there would change the results' last bits).
+- :data:`inline`: :data:`fast` inlined at numba-IR level into its callers (small helpers of the point loops).
 - :data:`entry`: :data:`fast` without the GIL: the element loops over a chunk of elements, called from Python
   (:func:`flexbody.chunks.run_chunks` runs several chunks on threads). They replace numba's ``parallel=True``
   loops, whose parfor compilation cost a first run about 20 s of CPU (re-optimizing every inlined kernel once
@@ -98,28 +91,15 @@ if NO_NRT:
 if NOALIAS:
     FAST_FLAGS["_noalias"] = True
 
+#: no kernel is called through a C function pointer (numba's ``cfunc`` wrapper, compiled by default for every
+#: jit function, costs the first run compilation time and nothing else)
+_NO_CFUNC: dict = dict(no_cfunc_wrapper=True)
 
-def _inline_in_numba_ir(expr, caller_ir, callee_ir) -> bool:
-    """numba's inlining cost model of the :data:`inline` helpers: inline at numba-IR level (True) into a caller
-    compiled with other floating-point flags than the helper's (a :data:`plain` caller), else (False) call the
-    helper compiled once, which LLVM then inlines (``alwaysinline``)."""
-    func = caller_ir.func_id.func
-    caller = getattr(func, "__globals__", {}).get(caller_ir.func_id.func_name)
-    options = getattr(caller, "targetoptions", None)
-    if not isinstance(options, dict):
-        return True
-    return any(options.get(key) != INLINE_FLAGS[key] for key in ("fastmath", "error_model"))
-
-
-#: the jit options of the small helpers (module docstring): compiled once, inlined by LLVM into every caller
-INLINE_FLAGS: dict = {**{k: v for k, v in FAST_FLAGS.items() if k != "_noalias"}, "cache": False,
-                      "forceinline": True, "no_cpython_wrapper": True, "no_cfunc_wrapper": True}
-
-plain = numba.njit(cache=CACHE)
-released = numba.njit(cache=CACHE, nogil=True)
-fast = numba.njit(**FAST_FLAGS)
-inline = numba.njit(inline=_inline_in_numba_ir, **INLINE_FLAGS)
-entry = numba.njit(nogil=True, **FAST_FLAGS)
+plain = numba.njit(cache=CACHE, **_NO_CFUNC)
+released = numba.njit(cache=CACHE, nogil=True, **_NO_CFUNC)
+fast = numba.njit(**FAST_FLAGS, **_NO_CFUNC)
+inline = numba.njit(inline="always", **FAST_FLAGS)
+entry = numba.njit(nogil=True, **FAST_FLAGS, **_NO_CFUNC)
 parallel = numba.njit(cache=CACHE, parallel=True)
 uint = numba.uint64
 

@@ -43,38 +43,14 @@ def test_fast_kernels_have_noalias_arguments_and_prefetch():
     assert "NRT_incref" not in ir_fast
 
 
-
-@numba.njit(inline=_numba._inline_in_numba_ir, **_numba.INLINE_FLAGS)
-def _scaled_into(a, s, out):
-    for i in range(out.shape[0]):
-        out[i] = s * a[i]
-
-
-@numba.njit(**{**_numba.FAST_FLAGS, "cache": False})
-def _fast_caller(a, b, out):
-    _scaled_into(a, 2.0, out)
-    for i in range(out.shape[0]):
-        out[i] += b[i]
-
-
-@numba.njit(cache=False)
-def _plain_caller(a, b, out):
-    _scaled_into(a, 2.0, out)
-    for i in range(out.shape[0]):
-        out[i] += b[i]
-
-
-def test_inline_helpers_are_compiled_once_and_inlined_by_llvm_into_fast_callers_only():
-    frontend = numba.core.compiler.run_frontend
-    assert _numba._inline_in_numba_ir(None, frontend(_plain_caller.py_func), None)
-    assert not _numba._inline_in_numba_ir(None, frontend(_fast_caller.py_func), None)
+def test_kernels_are_compiled_without_a_cfunc_wrapper():
+    with_wrapper = numba.njit(cache=False)(_add_into)
+    kernel = numba.njit(**{**_numba.FAST_FLAGS, "cache": False, "no_cfunc_wrapper": True})(_add_into)
     a, b, out = np.arange(4.0), np.ones(4), np.empty(4)
-    _plain_caller(a, b, out)
-    np.testing.assert_array_equal(out, 2.0 * a + 1.0)
-    assert len(_scaled_into.overloads) == 0, "inlined in numba IR into the plain caller: never compiled alone"
-    _fast_caller(a, b, out)
-    np.testing.assert_array_equal(out, 2.0 * a + 1.0)
-    assert len(_scaled_into.overloads) == 1, "compiled once, for the fast caller"
-    assert "alwaysinline" in next(iter(_scaled_into.inspect_llvm().values()))
-    calls = [line for line in next(iter(_fast_caller.inspect_llvm().values())).splitlines() if "call " in line]
-    assert not any("_scaled_into" in line for line in calls), "LLVM inlined the helper into the fast caller"
+    for k in (with_wrapper, kernel):
+        k(a, b, out)
+        np.testing.assert_array_equal(out, a + 1.0)
+    assert "cfunc." in next(iter(with_wrapper.inspect_llvm().values()))
+    assert "cfunc." not in next(iter(kernel.inspect_llvm().values()))
+    for decorator in (_numba.plain, _numba.released, _numba.fast, _numba.entry):
+        assert decorator(_add_into).targetoptions["no_cfunc_wrapper"] is True
