@@ -91,15 +91,11 @@ if NO_NRT:
 if NOALIAS:
     FAST_FLAGS["_noalias"] = True
 
-#: no kernel is called through a C function pointer (numba's ``cfunc`` wrapper, compiled by default for every
-#: jit function, costs the first run compilation time and nothing else)
-_NO_CFUNC: dict = dict(no_cfunc_wrapper=True)
-
-plain = numba.njit(cache=CACHE, **_NO_CFUNC)
-released = numba.njit(cache=CACHE, nogil=True, **_NO_CFUNC)
-fast = numba.njit(**FAST_FLAGS, **_NO_CFUNC)
+plain = numba.njit(cache=CACHE)
+released = numba.njit(cache=CACHE, nogil=True)
+fast = numba.njit(**FAST_FLAGS)
 inline = numba.njit(inline="always", **FAST_FLAGS)
-entry = numba.njit(nogil=True, **FAST_FLAGS, **_NO_CFUNC)
+entry = numba.njit(nogil=True, **FAST_FLAGS)
 parallel = numba.njit(cache=CACHE, parallel=True)
 uint = numba.uint64
 

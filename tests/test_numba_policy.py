@@ -41,16 +41,3 @@ def test_fast_kernels_have_noalias_arguments_and_prefetch():
     # the three data pointers are declared noalias in the fast kernel only
     assert ir_fast.count("noalias") > ir_plain.count("noalias")
     assert "NRT_incref" not in ir_fast
-
-
-def test_kernels_are_compiled_without_a_cfunc_wrapper():
-    with_wrapper = numba.njit(cache=False)(_add_into)
-    kernel = numba.njit(**{**_numba.FAST_FLAGS, "cache": False, "no_cfunc_wrapper": True})(_add_into)
-    a, b, out = np.arange(4.0), np.ones(4), np.empty(4)
-    for k in (with_wrapper, kernel):
-        k(a, b, out)
-        np.testing.assert_array_equal(out, a + 1.0)
-    assert "cfunc." in next(iter(with_wrapper.inspect_llvm().values()))
-    assert "cfunc." not in next(iter(kernel.inspect_llvm().values()))
-    for decorator in (_numba.plain, _numba.released, _numba.fast, _numba.entry):
-        assert decorator(_add_into).targetoptions["no_cfunc_wrapper"] is True
