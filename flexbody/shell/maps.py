@@ -18,7 +18,6 @@ blocks), by the body that owns it (:class:`flexbody.body.ShellBody`).
 
 from __future__ import annotations
 
-from collections import namedtuple
 from typing import NamedTuple
 
 import numpy as np
@@ -47,12 +46,6 @@ def _row_basis(M: np.ndarray, tol: float) -> np.ndarray:
     basis = M[:r]
     basis[np.abs(basis) <= tol] = 0.0
     return basis
-
-
-MapArrays = namedtuple("MapArrays", "used a_ptr a_p a_j a_v at_ptr at_g at_i at_v pt_gauss loc_rows n_loc loc_ptr "
-                       "loc_i loc_j loc_v par_p par_ptr par_j par_v pl_ptr pl_k pl_v w2 has_w n_rf nl_rows n_nl "
-                       "m_ptr m_i m_k m_v m_dense")
-MapArrays.__doc__ = """The arrays of a :class:`CompressedMaps` in the order of the element loop's ``maps`` argument."""
 
 
 class CompressedMaps:
@@ -222,9 +215,8 @@ class CompressedMaps:
     def nonzeros(self):
         return self.used, self.a_ptr, self.a_p, self.a_j, self.a_v, self.at_ptr, self.at_g, self.at_i, self.at_v
 
-    def kernel_args(self) -> MapArrays:
-        """The arrays of the map as the element loop takes them (:class:`MapArrays`)."""
-        return MapArrays(self.used, self.a_ptr, self.a_p, self.a_j, self.a_v, self.at_ptr, self.at_g, self.at_i, self.at_v,
+    def kernel_args(self):
+        return (self.used, self.a_ptr, self.a_p, self.a_j, self.a_v, self.at_ptr, self.at_g, self.at_i, self.at_v,
                 self.pt_gauss, self.loc_rows, self.n_loc, self.loc_ptr, self.loc_i, self.loc_j, self.loc_v,
                 self.par_p, self.par_ptr, self.par_j, self.par_v, self.pl_ptr, self.pl_k, self.pl_v,
                 self.w2, self.has_w, self.n_rf, self.nl_rows, self.n_nl, self.m_ptr, self.m_i, self.m_k, self.m_v,

@@ -34,9 +34,6 @@ Nothing is allocated per element or point. The section stiffness must be symmetr
 
 from __future__ import annotations
 
-from collections import namedtuple
-from typing import NamedTuple
-
 import numpy as np
 
 from flexbody import _numba
@@ -59,50 +56,23 @@ from flexbody.shell.maps import CompressedMaps, SectionStiffness, checked_sectio
 _AHEAD = 2   # elements prefetched ahead (a few microseconds each)
 
 
-class ElementInputs(NamedTuple):
-    """The per-element inputs of :func:`_chunk` (m elements)."""
-
-    x_el: np.ndarray        # (m, 6, 3) nodal positions
-    fr_el: np.ndarray       # (m, 6, 3, 3) nodal frames
-    e_ref: np.ndarray       # (m, 17, 8) reference covariant strains
-    to_cart: np.ndarray     # (m, 7, 8, 8) covariant-to-Cartesian maps at the Gauss points
-    weights: np.ndarray     # (m, 7) Gauss weights times area elements
-
-
-class ElementOutputs(NamedTuple):
-    """The results of :func:`_chunk`: forces of the strains, forces of given stresses, tangents."""
-
-    f: np.ndarray           # (m, 36)
-    fg: np.ndarray          # (m, 36), or (1, 36) without given stresses
-    K: np.ndarray           # (m, 36, 36), or (1, 36, 36) without tangents
-
-
-Workspace = namedtuple("Workspace", "x fr dn Ti ninv Pd Pda Pco PQ PT PR PF PX Pe Ps F Q T R X0 X1 d da co s g G2 phi fz cov st Ch CT v16 core Y Yt Kz Kiso K1 T0 Dl Bl CBl Sp Wp Cp Yp t0 t1 t2 t3 t4 t5")
-Workspace.__doc__ = """The scratch arrays of one :func:`_chunk` call (:func:`_workspaces`)."""
-
-
 @_numba.entry
-def _chunk(e0, e1, inputs, section, maps, want_tangent, use_stress, stress, out, ws):
+def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
+           used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
+           pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
+           par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
+           nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
+           want_tangent, use_stress, stress, f, fg, K,
+           x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps,
+           F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz,
+           cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
+           t0, t1, t2, t3, t4, t5):
     """Internal forces f[e] (and tangents K[e]) of the elements e0 <= e < e1.
-
-    The arguments come in named tuples: ``inputs`` (:class:`ElementInputs`), ``section``
-    (:class:`flexbody.shell.maps.SectionStiffness`), ``maps`` (:class:`flexbody.shell.maps.MapArrays`), ``out``
-    (:class:`ElementOutputs`) and the scratch arrays ``ws`` (:class:`Workspace`); numba passes their arrays as
-    separate noalias arguments, as if they were given one by one.
 
     With use_stress the geometric terms of the tangent carry the given stress resultants stress[e] instead
     of those of the strains (the mixed Newton iteration), and fg[e] receives the force of these stresses;
     f[e] is always the force of the strains.
     """
-    x_el, fr_el, e_ref, to_cart, weights = inputs
-    C, cblk = section
-    (used, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
-     par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf, nl_rows, n_nl, m_ptr, m_i, m_k, m_v,
-     m_dense) = maps
-    f, fg, K = out
-    (x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps, F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi,
-     fz, cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp, t0, t1, t2, t3, t4,
-     t5) = ws
     for e in range(e0, e1):
         if e + _AHEAD < e1:
             _prefetch_element(e + _AHEAD, x_el, fr_el, e_ref, to_cart, weights, want_tangent, K)
@@ -140,14 +110,14 @@ def _chunk(e0, e1, inputs, section, maps, want_tangent, use_stress, stress, out,
         _finish_tangent(e, Kz, Kiso, fr, Ti, fv, fz, dn, ninv, K1, T0, K, t0, t1)
 
 
-def _workspaces(npar: int, n_rf: int) -> Workspace:
-    """The scratch arrays of one :func:`_chunk` call, reused for every element of the chunk. ``npar``: nonlocal parameters (rows of the rank update), ``n_rf``
+def _workspaces(npar: int, n_rf: int) -> tuple:
+    """The scratch arrays of one :func:`_chunk` call, in the order of its trailing arguments (x ... t5),
+    reused for every element of the chunk. ``npar``: nonlocal parameters (rows of the rank update), ``n_rf``
     of them rotation-free."""
     npar = max(npar, 1)
     n_rows = max(4 * ((npar + 3) // 4), n_rf + 4 * ((npar - n_rf + 3) // 4))
     e = np.empty
-    return Workspace(
-            e((6, 3)), e((6, 3, 3)), e((6, 3)), e((6, 3, 3)), e((6, 2)),                  # x fr dn Ti ninv
+    return (e((6, 3)), e((6, 3, 3)), e((6, 3)), e((6, 3, 3)), e((6, 2)),                  # x fr dn Ti ninv
             e((N_EVAL, 3)), e((N_EVAL, 2, 3)), e((N_EVAL, 9)), e((N_EVAL, 3, 3)),           # Pd Pda Pco PQ
             e((N_EVAL, 3, 3)), e((N_EVAL, 3, 3)), e((N_EVAL, 4, 3)), e((N_EVAL, 2, 3, 3)),  # PT PR PF PX
             e((N_EVAL, 8)), e((N_EVAL, 8)),                                                 # Pe Ps
@@ -224,7 +194,7 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
     x_el, frames_el, e_ref, to_cart, weights = _element_arrays(x_el, frames_el, e_ref, to_cart,
                                                                weights=(weights, (N_GAUSS,)))
     m = x_el.shape[0]
-    section = checked_section(section)
+    C, cblk = checked_section(section)
     use_stress = stress is not None
     stress = _as(stress, (N_GAUSS, 8), "stress") if use_stress else np.zeros((1, N_GAUSS, 8))
     if use_stress and len(stress) != m:
@@ -234,10 +204,10 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
     fs = np.empty((m, NDOF)) if use_stress else np.empty((1, NDOF))
     K = np.empty((m, NDOF, NDOF)) if want_tangent else np.empty((1, NDOF, NDOF))
     if m:
-        args = (ElementInputs(x_el, frames_el, e_ref, to_cart, weights), section, maps.kernel_args(),
-                bool(want_tangent), use_stress, stress, ElementOutputs(f, fs, K))
+        args = (x_el, frames_el, e_ref, to_cart, weights, C, cblk, *maps.kernel_args(),
+                bool(want_tangent), use_stress, stress, f, fs, K)
         key, npar, n_rf = ("mitc6", maps.npar, maps.n_rf), maps.npar, maps.n_rf
-        run_chunks(lambda e0, e1: _chunk(e0, e1, *args, scratch(key, lambda: _workspaces(npar, n_rf))), m,
+        run_chunks(lambda e0, e1: _chunk(e0, e1, *args, *scratch(key, lambda: _workspaces(npar, n_rf))), m,
                    _n_chunks(m))
     if use_stress:
         return f, (K if want_tangent else None), fs
