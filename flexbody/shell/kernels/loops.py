@@ -72,6 +72,11 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
     With use_stress the geometric terms of the tangent carry the given stress resultants stress[e] instead
     of those of the strains (the mixed Newton iteration), and fg[e] receives the force of these stresses;
     f[e] is always the force of the strains.
+
+    The arguments are flat on purpose: grouped into named tuples (inputs, section, maps, outputs, workspace)
+    they keep their noalias attributes and give the same bits, but numba's dispatcher types a tuple's
+    arrays one by one in Python, about 10 us more per call (measured: 48 instead of 37 us for a 4-element
+    residual), a third of a small batch's residual.
     """
     for e in range(e0, e1):
         if e + _AHEAD < e1:
