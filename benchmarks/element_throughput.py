@@ -16,7 +16,7 @@ import numpy as np
 
 from flexbody.frames import frames_from_directors
 from flexbody.lie import so3
-from flexbody.shell.element import internal_force_tangent_batch
+from flexbody.shell.kernels.loops import internal_force_tangent_batch
 from flexbody.shell.geometry import element_geometry
 from flexbody.shell.material import ShellMaterial
 from flexbody.shell.variants import MITC6, NoTying

@@ -15,6 +15,7 @@ from flexbody.frames import frames_from_directors
 from flexbody.lie import kernels
 from flexbody.mesh import Tri6Mesh
 from flexbody.shell.geometry import N_GAUSS, element_geometry_batch
+from flexbody.shell.maps import SectionStiffness, checked_section
 from flexbody.shell.material import ShellMaterial
 from flexbody.shell.variants import MITC6, ElementBatch, ElementVariant, variant_from_key
 
@@ -123,6 +124,10 @@ class ShellBody:
     frames0: np.ndarray = field(init=False)
     reference: ReferenceGeometry = field(init=False, repr=False)
     origin: np.ndarray = field(init=False)   # the model origin of the computation (:func:`model_origin`)
+    # the material's section stiffness checked once (:func:`flexbody.shell.maps.checked_section`), and of which
+    # material: a body given another material checks that one's anew
+    _section: tuple[ShellMaterial, SectionStiffness] | None = field(init=False, default=None, repr=False,
+                                                                     compare=False)
 
     def __post_init__(self, tying: bool | str | None) -> None:
         if not isinstance(self.mesh, Tri6Mesh):
@@ -209,8 +214,15 @@ class ShellBody:
         the reference data, the section, the kernel and the variant's element state."""
         conn = self.mesh.elements
         ref = self.reference
+        section = self._section_stiffness()
         return ElementBatch(self.relative_positions(state)[conn], state.frames[conn], ref.e_ref, ref.to_cart,
-                            ref.weights, self.material.section(), self.kernel, self._element_state)
+                            ref.weights, section.matrix, self.kernel, self._element_state, section)
+
+    def _section_stiffness(self) -> SectionStiffness:
+        """The material's section stiffness, checked once (shape, symmetry, block coupling) for the kernels."""
+        if self._section is None or self._section[0] is not self.material:
+            self._section = (self.material, checked_section(self.material.section()))
+        return self._section[1]
 
     def relative_positions(self, state: ShellState) -> np.ndarray:
         """The state's positions relative to the model origin (n, 3): what the elements compute with."""

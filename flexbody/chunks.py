@@ -1,6 +1,6 @@
 """Running an element loop over chunks of elements, on as many threads as numba is set to use.
 
-The element kernels (:mod:`flexbody.shell.element`, :mod:`flexbody.shell.kernels.mitc7`) are compiled
+The element kernels (:mod:`flexbody.shell.kernels`, :mod:`flexbody.shell.kernels.mitc7`) are compiled
 functions of a range of elements ``[e0, e1)`` that release the GIL (:data:`flexbody._numba.entry`). One thread
 (``numba.get_num_threads() == 1``, every run below ``DynamicAnalysis.SINGLE_THREAD_ELEMENTS`` elements) or a
 small batch runs them in one call; otherwise the batch is cut into a few chunks per thread, run on a pool of

@@ -16,7 +16,7 @@ from flexbody.scenes.toml_scene import scene_from_document
 
 #: modules that ``import flexbody`` must not import: the compiled kernels and the optional, heavy outputs
 HEAVY = ("numba", "llvmlite", "scipy", "h5py", "rerun", "dask", "distributed", "meshio", "matplotlib",
-         "flexbody.shell.element", "flexbody.lie.kernels", "integrators")
+         "flexbody.shell.kernels.loops", "flexbody.lie.kernels", "integrators")
 
 
 def imported_after(code: str) -> set[str]:

@@ -96,7 +96,7 @@ def _elements(m: int, seed: int = 0):
 
 
 def test_element_kernels_give_the_same_bits_on_one_and_two_threads(threads):
-    from flexbody.shell.element import internal_force_tangent_batch, linearized_strains_batch
+    from flexbody.shell.kernels.loops import internal_force_tangent_batch, linearized_strains_batch
     from flexbody.shell.material import ShellMaterial
     from flexbody.shell.variants import MITC6
 

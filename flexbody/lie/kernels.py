@@ -13,7 +13,7 @@ Python, checks its arrays.
 
 The ``*_co_into`` maps take their coefficients (``coefficients``, or ``point_coefficients_into`` and
 ``inverse_coefficients``, which evaluate the series fused) instead of computing them: the element kernels
-(:mod:`flexbody.shell.element`, :mod:`flexbody.shell.kernels.mitc7`) compute them once per point and inline
+(:mod:`flexbody.shell.kernels`, :mod:`flexbody.shell.kernels.mitc7`) compute them once per point and inline
 these maps; this module is the only numba code of the SO(3) coefficients and derivative formulas.
 
 The Taylor coefficients are taken from ``so3.SERIES`` and frozen into the compiled code; the cache directory

@@ -14,7 +14,7 @@ A variant is a small frozen dataclass that carries its metadata and its two kern
 * the element computations the body calls, on an :class:`ElementBatch` (all elements of a body in one state):
   ``forces``, ``mixed_forces``, ``stress_forces``, ``linearized_strains``, ``strains``, ``strain_energy``,
   ``warm_up``, each with the readable numpy kernel (:mod:`flexbody.shell.reference.loops`,
-  :mod:`flexbody.shell.reference.bubble`) or the numba kernel (:mod:`flexbody.shell.element`,
+  :mod:`flexbody.shell.reference.bubble`) or the numba kernel (:mod:`flexbody.shell.kernels`,
   :mod:`flexbody.shell.kernels.mitc7`), as the batch's ``kernel`` says; and the readable kernel for one
   element (``element_force_tangent``, ``element_strains``, ``element_strain_energy``).
 
@@ -47,8 +47,9 @@ import numpy as np
 
 from flexbody.shell.reference import bubble, loops
 from flexbody.shell.reference.material import assumed_strain_maps
-from flexbody.shell.element import (CompressedMaps, compress_maps, element_strains_batch,
-                                    internal_force_tangent_batch, linearized_strains_batch)
+from flexbody.shell.kernels.loops import (element_strains_batch, internal_force_tangent_batch,
+                                          linearized_strains_batch)
+from flexbody.shell.maps import CompressedMaps, SectionStiffness, compress_maps
 from flexbody.shell.geometry import N_GAUSS, ElementGeometry
 from flexbody.shell.kernels.mitc7.loops import condensed_force_tangent_batch
 from flexbody.shell.kernels.mitc7.maps import MapNonzeros, map_nonzeros
@@ -75,6 +76,7 @@ class ElementBatch:
     section: np.ndarray         # (8, 8) section stiffness
     kernel: str = "numba"       # "numba" or "reference" (the readable numpy element)
     element_state: np.ndarray | None = None
+    checked_section: SectionStiffness | None = None   # ``section`` checked once by its owner (the body)
 
     def __len__(self) -> int:
         return len(self.x)
@@ -86,6 +88,12 @@ class ElementBatch:
     def fast_arrays(self) -> tuple:
         """(x, frames, e_ref, to_cart, weights, section): the first arguments of the numba entry points."""
         return self.x, self.frames, self.e_ref, self.to_cart, self.weights, self.section
+
+    def checked_arrays(self) -> tuple:
+        """:meth:`fast_arrays` with the section as its :class:`flexbody.shell.maps.SectionStiffness` (checked
+        here only when the batch's owner did not)."""
+        section = self.checked_section if self.checked_section is not None else self.section
+        return self.x, self.frames, self.e_ref, self.to_cart, self.weights, section
 
 
 @runtime_checkable
@@ -112,7 +120,7 @@ class ElementVariant(Protocol):
 
     def forces(self, batch: ElementBatch, want_tangent: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
         """Internal forces (m, 36) and, if asked, tangents (m, 36, 36) of a batch of elements (eq. numbers in
-        :mod:`flexbody.shell.element`)."""
+        :mod:`flexbody.shell.kernels`)."""
         ...
 
     def mixed_forces(self, batch: ElementBatch, stress: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -183,7 +191,7 @@ class _AssumedStrains:
 
     @cached_property
     def compressed_maps(self) -> CompressedMaps:
-        """The numba kernel's form of ``maps`` (:class:`flexbody.shell.element.CompressedMaps`), built once."""
+        """The numba kernel's form of ``maps`` (:class:`flexbody.shell.maps.CompressedMaps`), built once."""
         return compress_maps(self.maps)
 
     def element_state(self, n_elements: int) -> None:
@@ -194,7 +202,7 @@ class _AssumedStrains:
     def forces(self, batch: ElementBatch, want_tangent: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
         """Internal forces (m, 36) and tangents (m, 36, 36) (None without ``want_tangent``)."""
         if batch.kernel == "numba":
-            return internal_force_tangent_batch(*batch.fast_arrays(), self.compressed_maps, want_tangent)
+            return internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, want_tangent)
         m = len(batch)
         f = np.zeros((m, 36))
         K = np.zeros((m, 36, 36)) if want_tangent else None
@@ -209,7 +217,7 @@ class _AssumedStrains:
         """The mixed Newton iteration's terms for Gauss-point stresses (m, 7, 8): the forces of the strains
         (m, 36), the iteration matrices (m, 36, 36), the forces of the given stresses (m, 36)."""
         if batch.kernel == "numba":
-            return internal_force_tangent_batch(*batch.fast_arrays(), self.compressed_maps, True, stress)
+            return internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, True, stress)
         parts = [loops.force_tangent(batch.x[e], batch.frames[e], batch.geometry(e), batch.section,
                                      self.maps, stress=stress[e]) for e in range(len(batch))]
         return tuple(np.array([p[k] for p in parts]) for k in range(3))
@@ -217,7 +225,7 @@ class _AssumedStrains:
     def stress_forces(self, batch: ElementBatch, stress: np.ndarray) -> np.ndarray:
         """The forces sum_g w_g B_g^T stress_g (m, 36) of given Gauss-point stresses (m, 7, 8), no tangent."""
         if batch.kernel == "numba":
-            return internal_force_tangent_batch(*batch.fast_arrays(), self.compressed_maps, False, stress)[2]
+            return internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, False, stress)[2]
         return self.mixed_forces(batch, stress)[2]
 
     def linearized_strains(self, batch: ElementBatch, dh: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -248,9 +256,9 @@ class _AssumedStrains:
 
     def warm_up(self, batch: ElementBatch) -> None:
         """Compile (or load) the numba kernels this variant uses, on the batch (one element is enough)."""
-        internal_force_tangent_batch(*batch.fast_arrays(), self.compressed_maps, True)
-        internal_force_tangent_batch(*batch.fast_arrays(), self.compressed_maps, False)
-        internal_force_tangent_batch(*batch.fast_arrays(), self.compressed_maps, False,
+        internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, True)
+        internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, False)
+        internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, False,
                                      np.zeros((len(batch), N_GAUSS, 8)))
         linearized_strains_batch(batch.x, batch.frames, batch.e_ref, batch.to_cart, self.compressed_maps,
                                  np.zeros((len(batch), 36)))

@@ -13,7 +13,7 @@ from flexbody.assembly import Model
 from flexbody.body import ShellBody
 from flexbody.dynamics import DynamicModel
 from flexbody.mesh import generators
-from flexbody.shell import element
+from flexbody.shell import maps
 from flexbody.shell.reference.material import assumed_strain_maps
 from flexbody.shell.kernels.mitc7 import maps as mitc7_maps
 from flexbody.shell.material import ShellMaterial
@@ -67,9 +67,9 @@ def test_maps_built_once_read_only_and_as_before():
         np.testing.assert_array_equal(v.maps, A)
         assert v.maps is v.maps and v.compressed_maps is v.compressed_maps
         assert not v.maps.flags.writeable
-    assert isinstance(MITC6().compressed_maps, element.CompressedMaps)
+    assert isinstance(MITC6().compressed_maps, maps.CompressedMaps)
     v = MITC6()
-    assert element.compress_maps(v.compressed_maps) is v.compressed_maps    # passed through, not re-hashed
+    assert maps.compress_maps(v.compressed_maps) is v.compressed_maps    # passed through, not re-hashed
     w = MITC7()
     assert isinstance(w.compressed_maps, mitc7_maps.MapNonzeros)
     assert mitc7_maps.as_map_nonzeros(w.compressed_maps) is w.compressed_maps

@@ -16,7 +16,7 @@ import numpy as np
 from flexbody import _numba
 from flexbody.chunks import n_chunks, run_chunks
 from flexbody.shell.bubble_newton import BUBBLE_MAX_ITERATIONS, BUBBLE_TOL
-from flexbody.shell.element import _element_arrays
+from flexbody.shell.kernels.loops import _element_arrays
 from flexbody.shell.geometry import N_GAUSS
 from flexbody.shell.kernels.mitc7.augmented import evaluate_z, workspace, zspace
 from flexbody.shell.kernels.mitc7.condensation import condense_into, solve_bubble
