@@ -34,23 +34,36 @@ def n_chunks(m: int, min_parallel: int = MIN_PARALLEL) -> int:
     return max(1, min(m, 4 * threads))
 
 
-_local = threading.local()
+class Workspaces:
+    """Per-thread scratch arrays of the element kernels, owned by whoever calls them repeatedly (an element
+    variant keeps one: :attr:`flexbody.shell.variants.MITC6.workspaces`).
 
+    ``get(key, make)`` returns the calling thread's arrays for ``key``, made by ``make()`` on first use and
+    then reused: a kernel call's workspaces cost about 30 us to allocate, as much as a small batch's
+    evaluation. The kernels overwrite their workspaces before reading them, so the reuse changes no result;
+    one thread runs one chunk at a time, so no two running chunks share a workspace. A pickled copy starts
+    empty (the arrays are scratch, and a thread-local store does not travel).
+    """
 
-def scratch(key: tuple, make: Callable[[], tuple]) -> tuple:
-    """The calling thread's scratch arrays for ``key`` (made by ``make()`` on first use, then reused: a kernel
-    call's workspaces cost about 30 us to allocate, as much as a small batch's evaluation). The kernels
-    overwrite their workspaces before reading them, so the reuse changes no result; one thread runs one chunk
-    at a time, so no two running chunks share a workspace."""
-    cache = getattr(_local, "cache", None)
-    if cache is None:
-        cache = _local.cache = {}
-    found = cache.get(key)
-    if found is None:
-        if len(cache) >= 16:
-            cache.clear()
-        found = cache[key] = make()
-    return found
+    #: keys kept per thread before the store is cleared (a body uses one or two)
+    MAX_KEYS = 16
+
+    def __init__(self) -> None:
+        self._local = threading.local()
+
+    def get(self, key: tuple, make: Callable[[], tuple]) -> tuple:
+        store = getattr(self._local, "store", None)
+        if store is None:
+            store = self._local.store = {}
+        found = store.get(key)
+        if found is None:
+            if len(store) >= self.MAX_KEYS:
+                store.clear()
+            found = store[key] = make()
+        return found
+
+    def __reduce__(self):
+        return (Workspaces, ())
 
 
 @functools.lru_cache(maxsize=4)

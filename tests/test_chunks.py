@@ -3,6 +3,7 @@ and that the element kernels give the same bits on one and on two threads."""
 
 from __future__ import annotations
 
+import pickle
 import threading
 
 import numba
@@ -59,21 +60,32 @@ def test_an_exception_in_a_chunk_reaches_the_caller(threads):
         chunks.run_chunks(run, 100, 4)
 
 
-def test_scratch_is_made_once_per_thread_and_key():
+def test_workspaces_are_made_once_per_thread_and_key_and_pickle_empty():
     made = []
 
     def make():
         made.append(threading.get_ident())
         return (np.empty(3),)
 
-    first = chunks.scratch(("test", 1), make)
-    assert chunks.scratch(("test", 1), make) is first and len(made) == 1
-    assert chunks.scratch(("test", 2), make) is not first
+    ws = chunks.Workspaces()
+    first = ws.get(("test", 1), make)
+    assert ws.get(("test", 1), make) is first and len(made) == 1
+    assert ws.get(("test", 2), make) is not first
     other = []
-    worker = threading.Thread(target=lambda: other.append(chunks.scratch(("test", 1), make)))
+    worker = threading.Thread(target=lambda: other.append(ws.get(("test", 1), make)))
     worker.start()
     worker.join()
     assert other[0] is not first and len(made) == 3
+    assert chunks.Workspaces().get(("test", 1), make) is not first        # another owner, other arrays
+    copy = pickle.loads(pickle.dumps(ws))
+    assert copy.get(("test", 1), make) is not first and len(made) == 5
+
+
+def test_a_variant_owns_its_workspaces_and_pickles():
+    from flexbody.shell.variants import MITC6
+    v = MITC6()
+    assert v.workspaces is v.workspaces and MITC6().workspaces is not v.workspaces
+    assert pickle.loads(pickle.dumps(v)) == v
 
 
 def _elements(m: int, seed: int = 0):

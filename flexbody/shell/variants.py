@@ -50,6 +50,7 @@ from flexbody.shell.reference.material import assumed_strain_maps
 from flexbody.shell.kernels.loops import (element_strains_batch, internal_force_tangent_batch,
                                           linearized_strains_batch)
 from flexbody.shell.maps import CompressedMaps, SectionStiffness, compress_maps
+from flexbody.chunks import Workspaces
 from flexbody.shell.geometry import N_GAUSS, ElementGeometry
 from flexbody.shell.kernels.mitc7.loops import condensed_force_tangent_batch
 from flexbody.shell.kernels.mitc7.maps import MapNonzeros, map_nonzeros
@@ -194,6 +195,12 @@ class _AssumedStrains:
         """The numba kernel's form of ``maps`` (:class:`flexbody.shell.maps.CompressedMaps`), built once."""
         return compress_maps(self.maps)
 
+    @cached_property
+    def workspaces(self) -> Workspaces:
+        """The numba kernels' per-thread scratch arrays (:class:`flexbody.chunks.Workspaces`), reused by every
+        evaluation of this variant's bodies."""
+        return Workspaces()
+
     def element_state(self, n_elements: int) -> None:
         """The element unknowns a body keeps between evaluations (m, ...), or None when there are none."""
         return None
@@ -202,7 +209,8 @@ class _AssumedStrains:
     def forces(self, batch: ElementBatch, want_tangent: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
         """Internal forces (m, 36) and tangents (m, 36, 36) (None without ``want_tangent``)."""
         if batch.kernel == "numba":
-            return internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, want_tangent)
+            return internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, want_tangent,
+                                                workspaces=self.workspaces)
         m = len(batch)
         f = np.zeros((m, 36))
         K = np.zeros((m, 36, 36)) if want_tangent else None
@@ -217,7 +225,8 @@ class _AssumedStrains:
         """The mixed Newton iteration's terms for Gauss-point stresses (m, 7, 8): the forces of the strains
         (m, 36), the iteration matrices (m, 36, 36), the forces of the given stresses (m, 36)."""
         if batch.kernel == "numba":
-            return internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, True, stress)
+            return internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, True, stress,
+                                                workspaces=self.workspaces)
         parts = [loops.force_tangent(batch.x[e], batch.frames[e], batch.geometry(e), batch.section,
                                      self.maps, stress=stress[e]) for e in range(len(batch))]
         return tuple(np.array([p[k] for p in parts]) for k in range(3))
@@ -225,14 +234,15 @@ class _AssumedStrains:
     def stress_forces(self, batch: ElementBatch, stress: np.ndarray) -> np.ndarray:
         """The forces sum_g w_g B_g^T stress_g (m, 36) of given Gauss-point stresses (m, 7, 8), no tangent."""
         if batch.kernel == "numba":
-            return internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, False, stress)[2]
+            return internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, False, stress,
+                                                workspaces=self.workspaces)[2]
         return self.mixed_forces(batch, stress)[2]
 
     def linearized_strains(self, batch: ElementBatch, dh: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Strains eps_g (m, 7, 8) and their increments B_g dh (m, 7, 8) along local nodal motions dh (m, 36)."""
         if batch.kernel == "numba":
             return linearized_strains_batch(batch.x, batch.frames, batch.e_ref, batch.to_cart,
-                                            self.compressed_maps, dh)
+                                            self.compressed_maps, dh, workspaces=self.workspaces)
         m = len(batch)
         pairs = [loops.linearized_strains(batch.x[e], batch.frames[e], batch.geometry(e), dh[e], self.maps)
                  for e in range(m)]
@@ -247,7 +257,8 @@ class _AssumedStrains:
         """The elastic energy of the batch, from the numpy element ("reference", element by element) or the
         numba strain kernel ("numba")."""
         if strain_kernel == "numba":
-            eps = element_strains_batch(batch.x, batch.frames, batch.e_ref, batch.to_cart, self.compressed_maps)
+            eps = element_strains_batch(batch.x, batch.frames, batch.e_ref, batch.to_cart, self.compressed_maps,
+                                        workspaces=self.workspaces)
             return _energy(batch.weights, eps, batch.section)
         total = 0.0
         for e in range(len(batch)):
@@ -256,12 +267,14 @@ class _AssumedStrains:
 
     def warm_up(self, batch: ElementBatch) -> None:
         """Compile (or load) the numba kernels this variant uses, on the batch (one element is enough)."""
-        internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, True)
-        internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, False)
+        internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, True,
+                                     workspaces=self.workspaces)
         internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, False,
-                                     np.zeros((len(batch), N_GAUSS, 8)))
+                                     workspaces=self.workspaces)
+        internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, False,
+                                     np.zeros((len(batch), N_GAUSS, 8)), workspaces=self.workspaces)
         linearized_strains_batch(batch.x, batch.frames, batch.e_ref, batch.to_cart, self.compressed_maps,
-                                 np.zeros((len(batch), 36)))
+                                 np.zeros((len(batch), 36)), workspaces=self.workspaces)
 
     # -- one element, readable kernel ---------------------------------------------------------------------
     def element_force_tangent(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,

@@ -38,7 +38,7 @@ import numpy as np
 
 from flexbody import _numba
 from flexbody.chunks import n_chunks as _n_chunks
-from flexbody.chunks import run_chunks, scratch
+from flexbody.chunks import Workspaces, run_chunks
 from flexbody.kernel_arrays import kernel_input as _as
 from flexbody.shell.geometry import N_GAUSS
 from flexbody.shell.kernels.congruence import _cross_terms, _finish_tangent, _force_to_local, _has_cross_coupling
@@ -177,7 +177,7 @@ def _element_arrays(x_el, frames_el, e_ref, to_cart, **more):
 def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.ndarray,
                                  to_cart: np.ndarray, weights: np.ndarray, section: np.ndarray | SectionStiffness,
                                  A: np.ndarray | CompressedMaps, want_tangent: bool = True,
-                                 stress: np.ndarray | None = None):
+                                 stress: np.ndarray | None = None, workspaces: Workspaces | None = None):
     """Internal forces (m, 36) and tangents (m, 36, 36) of m elements, per node [u, theta], local frames.
 
     Same result as :func:`flexbody.shell.reference.loops.internal_force_tangent` element by element.
@@ -195,6 +195,8 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
         the tangent (the mixed Newton iteration, :func:`flexbody.shell.reference.loops.force_tangent`);
         the force is always that of the strains. With a stress the result is (f, K, f_stress), f_stress
         (m, 36) the force of the given stresses (K None without want_tangent).
+    workspaces : the kernels' per-thread scratch arrays, reused across calls (``ElementVariant.workspaces``);
+        None: made for this call
     """
     x_el, frames_el, e_ref, to_cart, weights = _element_arrays(x_el, frames_el, e_ref, to_cart,
                                                                weights=(weights, (N_GAUSS,)))
@@ -212,7 +214,8 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
         args = (x_el, frames_el, e_ref, to_cart, weights, C, cblk, *maps.kernel_args(),
                 bool(want_tangent), use_stress, stress, f, fs, K)
         key, npar, n_rf = ("mitc6", maps.npar, maps.n_rf), maps.npar, maps.n_rf
-        run_chunks(lambda e0, e1: _chunk(e0, e1, *args, *scratch(key, lambda: _workspaces(npar, n_rf))), m,
+        ws = workspaces if workspaces is not None else Workspaces()
+        run_chunks(lambda e0, e1: _chunk(e0, e1, *args, *ws.get(key, lambda: _workspaces(npar, n_rf))), m,
                    _n_chunks(m))
     if use_stress:
         return f, (K if want_tangent else None), fs
@@ -220,29 +223,33 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
 
 
 def element_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.ndarray, to_cart: np.ndarray,
-                          A: np.ndarray | CompressedMaps) -> np.ndarray:
+                          A: np.ndarray | CompressedMaps, workspaces: Workspaces | None = None) -> np.ndarray:
     """Cartesian strains [membrane | bending | shear] at the 7 Gauss points of m elements, (m, 7, 8).
 
-    Same result as :func:`flexbody.shell.reference.loops.element_strains` element by element.
+    Same result as :func:`flexbody.shell.reference.loops.element_strains` element by element (``workspaces``:
+    as in :func:`internal_force_tangent_batch`).
     """
     x_el, frames_el, e_ref, to_cart = _element_arrays(x_el, frames_el, e_ref, to_cart)
     m = x_el.shape[0]
     maps = compress_maps(A)
     out = np.empty((m, N_GAUSS, 8))
     if m:
+        ws = workspaces if workspaces is not None else Workspaces()
         args = (x_el, frames_el, e_ref, to_cart, *maps.nonzeros(), out, False, np.zeros((1, NDOF)),
                 np.zeros((1, N_GAUSS, 8)))
-        run_chunks(lambda e0, e1: _chunk_strains(e0, e1, *args, *scratch(("strains",), _strain_workspaces)), m,
+        run_chunks(lambda e0, e1: _chunk_strains(e0, e1, *args, *ws.get(("strains",), _strain_workspaces)), m,
                    _n_chunks(m))
     return out
 
 
 def linearized_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.ndarray, to_cart: np.ndarray,
-                             A: np.ndarray | CompressedMaps, dh_el: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                             A: np.ndarray | CompressedMaps, dh_el: np.ndarray,
+                             workspaces: Workspaces | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Cartesian Gauss-point strains eps (m, 7, 8) of m elements and their linearization B dh along the local
     nodal motions dh_el (m, 36), per node [du, dtheta] (the strain increment of the mixed Newton iteration).
 
-    Same result as :func:`flexbody.shell.reference.loops.linearized_strains` element by element.
+    Same result as :func:`flexbody.shell.reference.loops.linearized_strains` element by element (``workspaces``:
+    as in :func:`internal_force_tangent_batch`).
     """
     x_el, frames_el, e_ref, to_cart, dh_el = _element_arrays(x_el, frames_el, e_ref, to_cart,
                                                              dh_el=(dh_el, (NDOF,)))
@@ -251,7 +258,8 @@ def linearized_strains_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.
     eps = np.empty((m, N_GAUSS, 8))
     deps = np.empty((m, N_GAUSS, 8))
     if m:
+        ws = workspaces if workspaces is not None else Workspaces()
         args = (x_el, frames_el, e_ref, to_cart, *maps.nonzeros(), eps, True, dh_el, deps)
-        run_chunks(lambda e0, e1: _chunk_strains(e0, e1, *args, *scratch(("strains",), _strain_workspaces)), m,
+        run_chunks(lambda e0, e1: _chunk_strains(e0, e1, *args, *ws.get(("strains",), _strain_workspaces)), m,
                    _n_chunks(m))
     return eps, deps
