@@ -255,21 +255,13 @@ class _Attempt:
 
 
 @dataclass(frozen=True)
-class StepTaken:
-    """A step of h taken by :meth:`_Stepper.advance`: the end values on the free DoFs and the Newton work spent.
+class StepTaken(StepSolution):
+    """A step of h taken by :meth:`_Stepper.advance`: a :class:`StepSolution` with the sub-steps behind it.
 
     After cut-backs (two steps of h/2, recursively) the sub-steps' work is summed (:meth:`then`): the histories
     concatenated, ``substeps`` the sub-steps taken, ``failures`` the failed tries, ``h`` the last sub-step's size.
     """
 
-    state: object
-    v: np.ndarray                     # v_{n+1} (n,)
-    vdot: np.ndarray                  # vdot_{n+1} (n,)
-    a: np.ndarray                     # a_{n+1} (n,), the pseudo-acceleration
-    iterations: int
-    residuals: list[float]            # ||r|| at each iterate
-    corrections: list[float]          # weighted RMS norm of each correction
-    refreshes: int                    # iteration-matrix refreshes
     substeps: int = 1
     failures: int = 0
     h: float = 0.0                    # the size of the last sub-step (s)
