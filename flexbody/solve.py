@@ -307,7 +307,10 @@ def solve_dynamic(model: Model, end_time: float, time_step: float, *, gravity: S
         Nodal translational velocities and global angular velocities at t = 0, (n, 3) each (default 0;
         the components about the directors are not DoFs and are dropped).
     rho_inf : float
-        Spectral radius at infinite frequency in [0, 1] (1: no numerical damping).
+        Spectral radius at infinite frequency in [0, 1] (1: no numerical damping). A kicked thin membrane
+        started on its steady spin (:func:`flexbody.spinning.steady_spin`) with a driven hub wants
+        :data:`flexbody.spinning.STEADY_SPIN_RHO_INF` (0.5), which scenes take by default for such a start
+        (:func:`flexbody.scenes.analysis.default_rho_inf`); this function cannot tell the start apart.
     settings : integrators.generalized_alpha.AlphaSettings, optional
         Tolerances, iteration matrix policy, cut-backs, adaptive steps (``rho_inf`` above overrides theirs).
     output_every : int
