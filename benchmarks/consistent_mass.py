@@ -72,7 +72,7 @@ def spin_modes(n_radial: int, kind: str, count: int = 24, omega: float = 20.0):
     dyn = DynamicModel(Model(body, [Fix(mesh.node_set("inner"), "all")]), mass=kind)
     s = steady_spin(dyn, [0.0, 0.0, omega], center=[0.0, 0.0, 0.0])
     spin = SpinningModel(dyn, [0.0, 0.0, omega], [0.0, 0.0, 0.0])
-    K = (spin.residual_and_tangent(s.state, 1.0)[1] @ dyn._column_map(s.state)).tocsc()
+    K = (spin.residual_and_tangent(s.state, 1.0)[1] @ dyn.column_map(s.state)).tocsc()
     w2, phi = spl.eigsh(0.5 * (K + K.T), k=count, M=dyn.mass_matrix(), sigma=-1.0, which="LM")
     order = np.argsort(w2)
     w, phi = np.sqrt(np.abs(w2[order])) / omega, phi[:, order]

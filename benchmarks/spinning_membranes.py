@@ -2,10 +2,12 @@
 
     python benchmarks/spinning_membranes.py [CASE ...] [--revolutions R] [--cells 4,8,16]
                                              [--thickness 1e-3,1e-6] [--mass consistent] [--out FILE]
-                                             [--steps N] [--every K] [--rho-inf R] [--adaptive [--tolerance T]]
+                                             [--steps N] [--every K] [--rho-inf R] [--frame F]
+                                             [--adaptive [--tolerance T]]
 
-``--steps``, ``--every``, ``--rho-inf`` and ``--adaptive`` leave the defaults (100 steps per revolution, a record
-every 10 steps, the scene's rho_inf, fixed steps) for studies of the time step; the acceptance rows use none.
+``--steps``, ``--every``, ``--rho-inf``, ``--frame`` and ``--adaptive`` leave the defaults (100 steps per revolution, a
+record every 10 steps, the scene's rho_inf and frame, fixed steps) for studies of the time step; the acceptance
+rows use none.
 
 Cases (all start on the steady spin, ``[analysis.initial] state = "steady_spin"``, at default settings):
 
@@ -147,7 +149,7 @@ def _run(label: str, build, omega: float | None, compression: bool = False) -> s
     rejected = (f"; {res.rejected_error} + {res.rejected_newton} steps rejected, h {res.min_step:.2e} to "
                 f"{res.max_step:.2e}") if res.adaptive else ""
     what, drift = _drift(summary, omega)
-    state = "completed" if res.converged else f"stopped: {res.message[:100]}"
+    state = ("completed" if res.converged else f"stopped: {res.message[:100]}") + f"; {summary.frame} frame"
     if compression:
         state += f"; compressive Gauss points at the end {100 * compressive_fraction(scene.model.body, res.state):.0f} %"
     return (f"| {label} | {scene.model.n_dof} | {steps} | {res.stats.iterations / steps:.2f} | "
@@ -167,11 +169,13 @@ def main() -> None:
     parser.add_argument("--adaptive", action="store_true", help="error-controlled time steps")
     parser.add_argument("--tolerance", type=float, default=1e-5, help="adaptive: the local error tolerance")
     parser.add_argument("--rho-inf", type=float, default=None, help="the integrator's rho_inf (default: the scene's)")
+    parser.add_argument("--frame", default=None, choices=("inertial", "turning"), help="default: the scene's")
     parser.add_argument("--out", default=None)
     args = parser.parse_args()
     period = 2 * math.pi / OMEGA
     dt, end = period / args.steps, args.revolutions * period
     options = "" if args.rho_inf is None else f"rho_inf = {args.rho_inf}\n"
+    options += "" if args.frame is None else f"frame = \"{args.frame}\"\n"
     if args.adaptive:
         options += f"adaptive = true\n[analysis.integrator]\nerror_tolerance = {args.tolerance}\n"
     extra = dict(every=args.every, options=options)
@@ -197,6 +201,8 @@ def main() -> None:
         elif case == "sail":                                   # examples/solar_sail_10m.toml, 2 rpm
             sail_period = 60.0 / 2
             overrides = {"dt": sail_period / 100, "end_time": args.revolutions * sail_period, "mass": args.mass}
+            if args.frame is not None:
+                overrides["frame"] = args.frame
             rows.append(_run("10 m hexagonal sail, 4 rings, 2 rpm, 2 mN rim pulse",
                              lambda: load_toml_scene(SAIL, overrides), 2 * 2 * math.pi / 60, compression=True))
             print(rows[-1], flush=True)

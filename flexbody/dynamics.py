@@ -369,7 +369,7 @@ class DynamicModel:
         self._prescribed_cache[k] = (t, frames.copy(), x, moved)
         return x, moved
 
-    def _column_map(self, state: ShellState) -> sp.csc_matrix:
+    def column_map(self, state: ShellState) -> sp.csc_matrix:
         """D with K_dyn = K_model D: block R_I^T on the translation columns of the local-column nodes."""
         n = self.n_dof
         keep = np.ones(n, dtype=bool)

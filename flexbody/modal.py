@@ -94,7 +94,7 @@ def tangent_at_rest(dynamic: DynamicModel, state: ShellState, load_factor=0.0) -
     plain = state.copy()
     plain.stress = None
     K = dynamic.model.residual_and_tangent(plain, load_factor)[1]
-    return (K @ dynamic._column_map(plain)).tocsc()
+    return (K @ dynamic.column_map(plain)).tocsc()
 
 
 def tangent_in_spin(dynamic: DynamicModel, state: ShellState, omega, center, time: float = 0.0) -> sp.csc_matrix:
@@ -103,7 +103,7 @@ def tangent_in_spin(dynamic: DynamicModel, state: ShellState, omega, center, tim
     plain = state.copy()
     plain.stress = None
     K = SpinningModel(dynamic, omega, center, time).residual_and_tangent(plain, 1.0)[1]
-    return (K @ dynamic._column_map(plain)).tocsc()
+    return (K @ dynamic.column_map(plain)).tocsc()
 
 
 # --------------------------------------------------------------------------------------------------------

@@ -22,7 +22,8 @@ def summary_lines(summary) -> list[str]:
     dynamic = d.get("kind") == "dynamic"
     if dynamic:
         reached = (f"time reached {d['time']:.4g} s of {d['end_time']:.4g} s, dt {d['time_step']:.4g} s, "
-                   f"rho_inf {d['rho_inf']:g}{' (default)' if d.get('rho_inf_default') else ''}, {d['policy']} iteration matrix, {d.get('mass', 'lumped')} mass")
+                   f"rho_inf {d['rho_inf']:g}{' (default)' if d.get('rho_inf_default') else ''}, {d['policy']} iteration matrix, "
+                   f"{d.get('mass', 'lumped')} mass, {d.get('frame', 'inertial')} frame")
         ts = d.get("time_steps", {})
         if ts.get("adaptive"):
             reached += (f"; adaptive: {ts['accepted']} accepted, rejected {ts['rejected_error']} (error) + "

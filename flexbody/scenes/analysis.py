@@ -95,6 +95,10 @@ class DynamicAnalysis:
         (docs/dynamics.md, "Adaptive time steps")
     mass : the mass matrix, "lumped" (HRZ, diagonal; default) or "consistent" (translations
         int rho h N_I N_J dA, director inertia lumped): ``flexbody.dynamics.DynamicModel(mass=...)``
+    frame : where the equations of motion are solved: "inertial", "turning" (the frame turning with the
+        steady spin of ``initial_state``, :mod:`flexbody.turning_frame`; outputs stay inertial), or None: the
+        turning frame for a steady-spin start whose loads and prescribed motions allow it, else the inertial
+        one (:func:`flexbody.turning_frame.turning_frame_model`)
 
     Compared by identity (it holds arrays and functions).
     """
@@ -120,6 +124,7 @@ class DynamicAnalysis:
     damping: object | None = None
     adaptive: bool | None = None
     mass: str = "lumped"
+    frame: str | None = None
 
     def __post_init__(self) -> None:
         for name in ("time_step", "end_time"):
@@ -151,6 +156,8 @@ class DynamicAnalysis:
             raise ValueError(f"damping must be a RayleighDamping or None, got {type(self.damping).__name__}")
         from flexbody.shell.inertia import check_mass_kind
         check_mass_kind(self.mass)
+        if self.frame not in (None, "inertial", "turning"):
+            raise ValueError(f"frame must be 'inertial' or 'turning' (or None: the default), got {self.frame!r}")
 
     @property
     def rho_inf_used(self) -> float:

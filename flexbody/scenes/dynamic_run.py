@@ -17,6 +17,7 @@ The velocity fields and motions that used to live here (``rigid_field``, ``modal
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from typing import TYPE_CHECKING, Callable
 
 import numpy as np
@@ -56,7 +57,8 @@ def initial_velocity(dyn, state, analysis: DynamicAnalysis) -> np.ndarray:
 
 
 def initial_conditions(dyn, analysis: DynamicAnalysis):
-    """The state and free-DoF velocity at t = 0.
+    """The state and free-DoF velocity at t = 0, and the steady spin (:class:`flexbody.spinning.SteadySpin`) it
+    starts on (None for another start).
 
     ``analysis.initial_state`` None: the reference configuration; a state: that one; a
     :class:`flexbody.spinning.SteadySpinStart`: the steady spin (:func:`flexbody.spinning.steady_spin`) with its
@@ -67,9 +69,9 @@ def initial_conditions(dyn, analysis: DynamicAnalysis):
     if isinstance(start, SteadySpinStart):
         spin = steady_spin(dyn, start.angular_velocity, start.center)
         state = dyn.prescribe(spin.state, 0.0)
-        return state, spin.velocity + initial_velocity(dyn, state, analysis)
+        return state, spin.velocity + initial_velocity(dyn, state, analysis), spin
     state = dyn.prescribe(dyn.model.initial_state() if start is None else start, 0.0)
-    return state, initial_velocity(dyn, state, analysis)
+    return state, initial_velocity(dyn, state, analysis), None
 
 
 def _is_conservative(scene: Scene) -> bool:
@@ -134,7 +136,9 @@ class DynamicRun:
         self.dyn = DynamicModel(scene.model, gravity=a.gravity, load_factor=a.load_factor,
                                 prescribed=list(a.prescribed), point_masses=list(a.point_masses), damping=a.damping,
                                 mass=a.mass)
-        self.state, self.v0 = initial_conditions(self.dyn, a)
+        self.state, self.v0, spin = initial_conditions(self.dyn, a)
+        from flexbody.turning_frame import turning_frame_model
+        self.turning = turning_frame_model(self.dyn, a.frame, spin, (0.0, a.end_time / a.n_steps, a.end_time))
         self.history: dict[str, list[float]] = {"time": [], **{o.name: [] for o in scene.outputs}}
         self.energies: dict[str, list] = {k: [] for k in ("time", *ENERGY_KEYS, "linear_momentum",
                                                           "angular_momentum")}
@@ -171,6 +175,7 @@ class DynamicRun:
         Returns the :class:`integrators.generalized_alpha.DynamicResult`; the energies and momenta are
         accounted for by an :class:`flexbody.energy.EnergyAccount` observing the integrator."""
         from flexbody.energy import EnergyAccount
+        from flexbody.turning_frame import InertialObservers
         from integrators.generalized_alpha import generalized_alpha
 
         dyn, a, restart, state, v0 = self.dyn, self.analysis, self.restart, self.state, self.v0
@@ -193,12 +198,26 @@ class DynamicRun:
             self.record(first, state, v0, initial=True)
             options = dict(t_start=restart.step * h, acceleration=restart.vdot, pseudo_acceleration=restart.a,
                            first_step=restart.step)
+        problem, observer = dyn, account
+        if self.turning is not None:           # solved in the turning frame, observed in the inertial one
+            problem, observer = self.turning, InertialObservers(self.turning, (account,))
+            if restart is None:
+                v0 = self.turning.relative_velocity(state, v0)
+            else:
+                state, v0, (vdot, pseudo) = self.turning.turning_motion(state, v0, (restart.vdot, restart.a),
+                                                                        options["t_start"])
+                options.update(acceleration=vdot, pseudo_acceleration=pseudo)
         try:
-            result = generalized_alpha(dyn, a.end_time, h, state=state, velocity=v0, settings=a.alpha_settings(),
-                                       observers=(account,), record_every=a.output_every, **options)
+            result = generalized_alpha(problem, a.end_time, h, state=state, velocity=v0, settings=a.alpha_settings(),
+                                       observers=(observer,), record_every=a.output_every, **options)
         except KeyboardInterrupt:              # Ctrl-C / a stop request: record the last converged step, then stop
             account.interrupted()
             raise
+        if self.turning is not None:
+            q, v, (vdot, pseudo) = self.turning.inertial_motion(result.state, result.velocity,
+                                                                (result.acceleration, result.pseudo_acceleration),
+                                                                result.time)
+            result = replace(result, state=q, velocity=v, acceleration=vdot, pseudo_acceleration=pseudo)
         if result.time > self.history["time"][-1]:  # stopped between two output steps: record where it stopped
             last = account.state_record(_steps_taken(result, a), result.time, result.state, result.velocity,
                                         time.perf_counter() - t0)
@@ -218,4 +237,5 @@ class DynamicRun:
                                  wall, setup, compile_time, analysis=self.analysis, energies=self.energies,
                                  records=self.records,
                                  total_mass=self.dyn.inertia.total_mass, isolated=_is_isolated(scene),
-                                 conservative=_is_conservative(scene), rotation_per_step=self.turn, size=size)
+                                 conservative=_is_conservative(scene), rotation_per_step=self.turn, size=size,
+                                 frame="inertial" if self.turning is None else "turning")

@@ -152,6 +152,8 @@ class DynamicRunSummary(RunSummary):
     rotation_per_step : the largest rotation per time step |omega| h over the recorded instants
         (:func:`flexbody.scenes.dynamic_run.rotation_rate`) and its time
     size : the diagonal of the body's bounding box in the reference configuration
+    frame : where the run was solved, "inertial" or "turning" (:mod:`flexbody.turning_frame`; the outputs are
+        inertial either way)
     records : the step records (:class:`flexbody.energy.DynamicStepRecord`) after the start: every output step,
         and the last converged one of a run that stopped between two
     """
@@ -167,6 +169,7 @@ class DynamicRunSummary(RunSummary):
     rotation_per_step: tuple[float, float] = (0.0, 0.0)
     size: float = 0.0
     records: list = field(default_factory=list)
+    frame: str = "inertial"
 
     @property
     def largest_step(self) -> float:
@@ -261,6 +264,7 @@ class DynamicRunSummary(RunSummary):
             "rho_inf_default": a.rho_inf is None,
             "time_steps": self.step_summary(),
             "mass": a.mass,
+            "frame": self.frame, "frame_default": a.frame is None,
             "outputs": self.final_outputs(),
             "errors": self.errors, "max_rel_error": self.max_rel_error,
             "energy": self.energy_summary(), "momentum": self.momentum_summary(),

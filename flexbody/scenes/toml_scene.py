@@ -311,7 +311,8 @@ def _build_dynamic_analysis(t: Table, body, hub: np.ndarray | None, load_functio
     if load_functions:
         load_factor = GroupFactors((load_factor or constant, *load_functions))
     settings = _build_integrator(v["integrator"])
-    kwargs: dict[str, Any] = {"point_masses": tuple(point_masses), "adaptive": v["adaptive"], "mass": v["mass"]}
+    kwargs: dict[str, Any] = {"point_masses": tuple(point_masses), "adaptive": v["adaptive"], "mass": v["mass"],
+                              "frame": v["frame"]}
     if v["damping"] is not None:
         kwargs["damping"] = _build_damping(v["damping"])
     if v["initial"] is not None:

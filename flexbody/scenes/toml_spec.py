@@ -329,6 +329,12 @@ DYNAMIC = TableSpec("analysis", (
         "N_J dA, director inertia lumped); used by everything that needs the mass (inertia, gravity, energies, "
         "momenta, mass damping, the steady spin); docs/dynamics.md \"Consistent mass\" compares the two (Python: "
         "`DynamicAnalysis(mass=...)`, `DynamicModel(mass=...)`)", default="lumped", choices=("lumped", "consistent")),
+    Key("frame", "string", "where the equations of motion are solved: `\"inertial\"`, or `\"turning\"`: the frame "
+        "turning with the steady spin of `[analysis.initial]` (centrifugal and Coriolis forces; outputs, energies "
+        "and files stay inertial; needs loads and gravity along the spin axis or follower loads, and a hub turning "
+        "with the frame); absent: turning for a steady-spin start that allows it, else inertial; the summary says "
+        "which (`frame`); docs/dynamics.md \"Turning frame\"", default=None,
+        shown="turning for a steady-spin start, else inertial", choices=("inertial", "turning")),
 ), "a dynamic analysis (`type = \"dynamic\"`): Lie-group generalized-alpha")
 
 INITIAL = TableSpec("analysis.initial", (

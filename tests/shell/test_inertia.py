@@ -172,7 +172,7 @@ def test_global_columns_are_the_model_tangent_times_the_column_map(rng):
     r_local, K_local = dyn.model.residual_and_tangent(state, 1.3)
     r, K = dyn.model.residual_and_tangent(state, 1.3, global_columns=True)
     assert np.array_equal(r, r_local)
-    expected = (K_local @ dyn._column_map(state)).toarray()
+    expected = (K_local @ dyn.column_map(state)).toarray()
     assert np.abs(K.toarray() - expected).max() < 1e-13 * np.abs(expected).max()
 
 
