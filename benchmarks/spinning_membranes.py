@@ -3,9 +3,9 @@
     python benchmarks/spinning_membranes.py [CASE ...] [--revolutions R] [--cells 4,8,16]
                                              [--thickness 1e-3,1e-6] [--mass consistent] [--out FILE]
                                              [--steps N] [--every K] [--rho-inf R] [--frame F]
-                                             [--adaptive [--tolerance T]]
+                                             [--adaptive [--tolerance T]] [--integrator KEY=VALUE ...]
 
-``--steps``, ``--every``, ``--rho-inf``, ``--frame`` and ``--adaptive`` leave the defaults (100 steps per revolution, a
+``--steps``, ``--every``, ``--rho-inf``, ``--frame``, ``--adaptive`` and ``--integrator`` leave the defaults (100 steps per revolution, a
 record every 10 steps, the scene's rho_inf and frame, fixed steps) for studies of the time step; the acceptance
 rows use none.
 
@@ -170,14 +170,20 @@ def main() -> None:
     parser.add_argument("--tolerance", type=float, default=1e-5, help="adaptive: the local error tolerance")
     parser.add_argument("--rho-inf", type=float, default=None, help="the integrator's rho_inf (default: the scene's)")
     parser.add_argument("--frame", default=None, choices=("inertial", "turning"), help="default: the scene's")
+    parser.add_argument("--integrator", action="append", default=[], metavar="KEY=VALUE",
+                        help="an [analysis.integrator] setting (e.g. atol=1e-8), repeatable")
     parser.add_argument("--out", default=None)
     args = parser.parse_args()
     period = 2 * math.pi / OMEGA
     dt, end = period / args.steps, args.revolutions * period
     options = "" if args.rho_inf is None else f"rho_inf = {args.rho_inf}\n"
     options += "" if args.frame is None else f"frame = \"{args.frame}\"\n"
+    integrator = list(args.integrator)
     if args.adaptive:
-        options += f"adaptive = true\n[analysis.integrator]\nerror_tolerance = {args.tolerance}\n"
+        options += "adaptive = true\n"
+        integrator.append(f"error_tolerance = {args.tolerance}")
+    if integrator:
+        options += "[analysis.integrator]\n" + "".join(f"{item}\n" for item in integrator)
     extra = dict(every=args.every, options=options)
     rows = ["| case | DoFs | steps | iterations / step | factorizations / step | CPU s | rim w peak rad/s | outcome |",
             "|---|---|---|---|---|---|---|---|"]
