@@ -321,13 +321,19 @@ class InertialObservers:
 
     model: TurningFrameModel
     observers: tuple
+    _last: tuple = (None, None)      # (the last step's relative velocity, its inertial map)
 
     def __call__(self, step) -> None:
         m, t = self.model, step.time
         state, v, (vdot, a) = m.inertial_motion(step.state, step.velocity,
                                                 (step.acceleration, step.pseudo_acceleration), t)
-        # v_n mapped at q_{n+1}: only the work of damping forces uses it, on which a rigid velocity does none
-        v_prev = v if step.initial else m.inertial_motion(step.state, step.previous_velocity, (), t)[1]
+        if step.initial:
+            v_prev = v
+        elif step.previous_velocity is self._last[0]:       # v_n, mapped at its own step (exact)
+            v_prev = self._last[1]
+        else:                                               # mapped at q_{n+1} (only damping work uses it)
+            v_prev = m.inertial_motion(step.state, step.previous_velocity, (), t)[1]
+        self._last = (step.velocity, v)
         mapped = replace(step, state=state, velocity=v, acceleration=vdot, pseudo_acceleration=a,
                          previous_velocity=v_prev)
         for observer in self.observers:
