@@ -17,6 +17,7 @@ from flexbody.mesh import Tri6Mesh
 from flexbody.shell.geometry import N_GAUSS, element_geometry_batch
 from flexbody.shell.maps import SectionStiffness, checked_section
 from flexbody.shell.material import ShellMaterial
+from flexbody.shell.reference.material import section_increments, section_stresses
 from flexbody.shell.variants import MITC6, ElementBatch, ElementVariant, variant_from_key
 
 
@@ -147,6 +148,9 @@ class ShellBody:
                           "(flexbody.shell.variants)", DeprecationWarning, stacklevel=3)
         if self.kernel not in ("numba", "reference"):
             raise ValueError(f"kernel must be 'numba' or 'reference', got {self.kernel!r}")
+        if self.material.wrinkling and not self.element.supports_wrinkling:
+            raise ValueError(f"the tension-field membrane (material wrinkling = true) needs an MITC6 element, not "
+                             f"{self.element.name} (tying = {self.element.key!r})")
         self.frames0 = frames_from_directors(self.mesh.directors, self.frame_axis)
         self.origin = model_origin(self.mesh.nodes)
         self.reference = build_reference(self.mesh, self.frames0, self.origin)
@@ -180,8 +184,10 @@ class ShellBody:
     @property
     def supports_mixed_iteration(self) -> bool:
         """Whether the mixed Newton iteration (independent Gauss-point stresses) is available: the MITC6
-        variants; MITC7 condenses its bubble against the strains' own stresses."""
-        return self.element.supports_mixed_iteration
+        variants with the linear law; MITC7 condenses its bubble against the strains' own stresses, and the
+        tension-field membrane (``material.wrinkling``) is not linear (the iteration's stress update
+        C (eps + B dh) assumes it is): the solvers then take the displacement iteration."""
+        return self.element.supports_mixed_iteration and not self.material.wrinkling
 
     def element_forces(self, state: ShellState, want_tangent: bool = True):
         """Element internal forces (m, 36) and tangents (m, 36, 36) in the nodal local frames."""
@@ -194,6 +200,9 @@ class ShellBody:
         geometric terms carry the given stresses, and the forces of these stresses f_stress (m, 36)
         (:func:`flexbody.shell.reference.loops.force_tangent`). MITC6 variants only."""
         batch = self._batch(state)
+        if self.material.wrinkling:
+            raise ValueError("the mixed Newton iteration assumes a linear section law; the tension-field membrane "
+                             "(material wrinkling = true) is not: use the displacement iteration")
         if not self.element.supports_mixed_iteration:
             return self.element.mixed_forces(batch, stress)          # raises: says why
         stress = np.asarray(stress, dtype=float)
@@ -216,7 +225,8 @@ class ShellBody:
         ref = self.reference
         section = self._section_stiffness()
         return ElementBatch(self.relative_positions(state)[conn], state.frames[conn], ref.e_ref, ref.to_cart,
-                            ref.weights, section.matrix, self.kernel, self._element_state, section)
+                            ref.weights, section.matrix, self.kernel, self._element_state, section,
+                            self.material.wrinkling)
 
     def _section_stiffness(self) -> SectionStiffness:
         """The material's section stiffness, checked once (shape, symmetry, block coupling) for the kernels."""
@@ -231,15 +241,21 @@ class ShellBody:
     def stresses(self, state: ShellState, dh_el: np.ndarray | None = None) -> np.ndarray:
         """Stress resultants C (eps_g + B_g dh) (m, 7, 8) at the Gauss points: of the state (dh_el None), or
         linearized along local nodal motions dh_el (m, 36), per node [du, dtheta] -- the stress update of
-        the mixed Newton iteration (MITC6 variants)."""
+        the mixed Newton iteration (MITC6 variants). With the tension-field membrane (``material.wrinkling``)
+        sigma(eps_g) + C_t(eps_g) B_g dh (:mod:`flexbody.shell.reference.material`)."""
         eps, deps = self._linearized_strains(state, dh_el)
-        return (eps + deps) @ self.material.section().T
+        section = self.material.section()
+        if not self.material.wrinkling:
+            return (eps + deps) @ section.T
+        return section_stresses(eps, section, True) + section_increments(eps, deps, section, True)
 
     def stress_rates(self, state: ShellState, hdot_el: np.ndarray) -> np.ndarray:
         """The linearized stress increments C B_g hdot (m, 7, 8) of local nodal motions hdot_el (m, 36) alone
         (without the stresses of the state): with nodal velocities, the Kelvin-Voigt stresses of the strain
-        rates B v (zero for a rigid velocity). MITC6 variants."""
-        return self._linearized_strains(state, hdot_el)[1] @ self.material.section().T
+        rates B v (zero for a rigid velocity). MITC6 variants. With the tension-field membrane the point
+        tangent C_t(eps_g) of the state takes the place of C."""
+        eps, deps = self._linearized_strains(state, hdot_el)
+        return section_increments(eps, deps, self.material.section(), self.material.wrinkling)
 
     def _linearized_strains(self, state: ShellState, dh_el: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """Strains eps_g (m, 7, 8) of the state and their linearized increments B_g dh (m, 7, 8)."""
@@ -268,7 +284,8 @@ class ShellBody:
                                           ref.to_cart[:1], ref.weights[:1], self.material.section()))
 
     def strain_energy(self, state: ShellState, strain_kernel: str = "reference") -> float:
-        """Elastic energy of the body, 1/2 sum_g w_g eps^T C eps, with the strains of the numpy reference element
+        """Elastic energy of the body, 1/2 sum_g w_g eps^T C eps (the tension-field membrane: its relaxed energy,
+        1/2 sum_g w_g eps^T sigma(eps)), with the strains of the numpy reference element
         ("reference", element by element) or the numba strain kernel ("numba"; the dynamic energy records).
         MITC7: at the condensed bubbles, found with the body's kernel."""
         if strain_kernel not in ("numba", "reference"):

@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from flexbody.shell.geometry import EVAL_DN, GAUSS_OFFSET, GAUSS_POINTS, N_GAUSS
+from flexbody.shell.reference.material import section_stresses
 from flexbody.shell.shape import shape_derivatives, shape_functions
 
 if TYPE_CHECKING:
@@ -173,7 +174,7 @@ class Resultants:
 def stress_resultants(body: "ShellBody", state: "ShellState") -> Resultants:
     """The stress resultants of ``state`` (:class:`Resultants`) of a :class:`flexbody.body.ShellBody`."""
     eps = gauss_strains(body, state)
-    sigma = eps @ body.material.section().T
+    sigma = section_stresses(eps, body.material.section(), body.material.wrinkling)
     weights = body.reference.weights
     mesh = body.mesh
     bases = gauss_bases(mesh)

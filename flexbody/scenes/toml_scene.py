@@ -438,7 +438,7 @@ def scene_from_document(doc: dict, path: str | Path) -> Scene:
     mt = read_value(spec.TOP["material"], top)
     m = read_table(spec.MATERIAL, mt, done=False)
     material = call_checked(where, "material", ShellMaterial, m["young"], m["poisson"], m["thickness"],
-                            m["density"], m["shear_correction"])
+                            m["density"], m["shear_correction"], m["wrinkling"])
     finish(spec.MATERIAL, mt)
     et = read_value(spec.TOP["element"], top)
     e = read_table(spec.ELEMENT, et, done=False)

@@ -202,6 +202,9 @@ MATERIAL = TableSpec("material", (
     Key("thickness", "number", "the shell thickness h"),
     Key("density", "number", "mass density (dynamics only; > 0 for a dynamic analysis)", default=0.0),
     Key("shear_correction", "number", "transverse shear correction factor", default=5.0 / 6.0, shown="5/6"),
+    Key("wrinkling", "boolean", "the tension-field membrane law: a film that wrinkles carries no compression "
+        "(docs/theory.md); bending and transverse shear stay linear. MITC6 elements only; no mixed iteration",
+        default=False),
 ), "the linear elastic shell material (`flexbody.shell.material.ShellMaterial`)")
 
 ELEMENT = TableSpec("element", (

@@ -19,6 +19,9 @@ class ShellMaterial:
     thickness : shell thickness h > 0
     density : mass density rho >= 0 (only dynamics uses it)
     shear_correction : transverse shear correction factor (5/6)
+    wrinkling : the tension-field membrane law (a film that wrinkles instead of carrying compression:
+        :func:`flexbody.shell.reference.material.tension_field_membrane`, docs/theory.md); bending and
+        transverse shear stay linear. False: the linear law.
     """
 
     young: float
@@ -26,6 +29,7 @@ class ShellMaterial:
     thickness: float
     density: float = 0.0
     shear_correction: float = 5.0 / 6.0
+    wrinkling: bool = False
 
     def __post_init__(self) -> None:
         for name in ("young", "poisson", "thickness", "density", "shear_correction"):
@@ -33,6 +37,9 @@ class ShellMaterial:
             if (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.floating, np.integer))
                     or not math.isfinite(value)):
                 raise ValueError(f"material {name} must be a finite number, got {value!r}")
+        if not isinstance(self.wrinkling, (bool, np.bool_)):
+            raise ValueError(f"material wrinkling must be true or false, got {self.wrinkling!r}")
+        object.__setattr__(self, "wrinkling", bool(self.wrinkling))
         if self.young <= 0:
             raise ValueError(f"material young (E) must be > 0, got {self.young!r}")
         if not -1.0 < self.poisson < 0.5:

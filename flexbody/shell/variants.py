@@ -9,7 +9,8 @@ A variant is a small frozen dataclass that carries its metadata and its two kern
   and ``compressed_maps``, the numba kernel's form of it, both built once per object and cached on it;
 * its capabilities, as attributes: ``supports_mixed_iteration`` (the iteration matrix with given
   Gauss-point stresses), ``supports_stress_forces`` (forces of given stresses), ``supports_linearized_stresses``
-  (stresses C (eps + B dh) linearized along nodal motions); ``condenses_bubble`` (an element unknown solved
+  (stresses C (eps + B dh) linearized along nodal motions), ``supports_wrinkling`` (the tension-field membrane
+  law of ``ShellMaterial.wrinkling``, the batch's ``wrinkling``); ``condenses_bubble`` (an element unknown solved
   element by element, kept between evaluations as the warm start: :meth:`ElementVariant.element_state`);
 * the element computations the body calls, on an :class:`ElementBatch` (all elements of a body in one state):
   ``forces``, ``mixed_forces``, ``stress_forces``, ``linearized_strains``, ``strains``, ``strain_energy``,
@@ -46,7 +47,7 @@ from typing import ClassVar, Protocol, runtime_checkable
 import numpy as np
 
 from flexbody.shell.reference import bubble, loops
-from flexbody.shell.reference.material import assumed_strain_maps
+from flexbody.shell.reference.material import assumed_strain_maps, section_stresses
 from flexbody.shell.kernels.loops import (element_strains_batch, internal_force_tangent_batch,
                                           linearized_strains_batch)
 from flexbody.shell.maps import CompressedMaps, SectionStiffness, compress_maps
@@ -78,6 +79,7 @@ class ElementBatch:
     kernel: str = "numba"       # "numba" or "reference" (the readable numpy element)
     element_state: np.ndarray | None = None
     checked_section: SectionStiffness | None = None   # ``section`` checked once by its owner (the body)
+    wrinkling: bool = False     # the tension-field membrane law (ShellMaterial.wrinkling) instead of the linear
 
     def __len__(self) -> int:
         return len(self.x)
@@ -108,6 +110,7 @@ class ElementVariant(Protocol):
     supports_mixed_iteration: bool
     supports_stress_forces: bool
     supports_linearized_stresses: bool
+    supports_wrinkling: bool
     condenses_bubble: bool
 
     @property
@@ -150,8 +153,9 @@ class ElementVariant(Protocol):
         ...
 
     def element_force_tangent(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
-                              section: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Force (36) and tangent (36, 36) of one element with the readable numpy kernel."""
+                              section: np.ndarray, wrinkling: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Force (36) and tangent (36, 36) of one element with the readable numpy kernel (``wrinkling``: the
+        tension-field membrane law)."""
         ...
 
     def element_strains(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
@@ -165,8 +169,8 @@ class ElementVariant(Protocol):
         ...
 
     def element_strain_energy(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
-                              section: np.ndarray) -> float:
-        """Strain energy of one element with the readable numpy kernel."""
+                              section: np.ndarray, wrinkling: bool = False) -> float:
+        """Strain energy of one element with the readable numpy kernel (``wrinkling``: the relaxed energy)."""
         ...
 
 
@@ -175,8 +179,11 @@ def _read_only(A: np.ndarray) -> np.ndarray:
     return A
 
 
-def _energy(weights: np.ndarray, eps: np.ndarray, section: np.ndarray) -> float:
-    """1/2 sum_e sum_g w_g eps_g^T C eps_g of the Gauss-point strains eps (m, 7, 8)."""
+def _energy(weights: np.ndarray, eps: np.ndarray, section: np.ndarray, wrinkling: bool = False) -> float:
+    """1/2 sum_e sum_g w_g eps_g^T C eps_g of the Gauss-point strains eps (m, 7, 8); with ``wrinkling`` the
+    relaxed energy 1/2 sum w_g eps_g^T sigma(eps_g) of the tension-field membrane."""
+    if wrinkling:
+        return 0.5 * float(np.einsum("eg,egi,egi->", weights, eps, section_stresses(eps, section, True)))
     return 0.5 * float(np.einsum("eg,egi,ij,egj->", weights, eps, section, eps))
 
 
@@ -187,6 +194,7 @@ class _AssumedStrains:
     supports_mixed_iteration: ClassVar[bool] = True
     supports_stress_forces: ClassVar[bool] = True
     supports_linearized_stresses: ClassVar[bool] = True
+    supports_wrinkling: ClassVar[bool] = True
     condenses_bubble: ClassVar[bool] = False
     maps: np.ndarray
 
@@ -210,12 +218,13 @@ class _AssumedStrains:
         """Internal forces (m, 36) and tangents (m, 36, 36) (None without ``want_tangent``)."""
         if batch.kernel == "numba":
             return internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, want_tangent,
-                                                workspaces=self.workspaces)
+                                                workspaces=self.workspaces, wrinkling=batch.wrinkling)
         m = len(batch)
         f = np.zeros((m, 36))
         K = np.zeros((m, 36, 36)) if want_tangent else None
         for e in range(m):
-            fe, Ke = loops.force_tangent(batch.x[e], batch.frames[e], batch.geometry(e), batch.section, self.maps)
+            fe, Ke = loops.force_tangent(batch.x[e], batch.frames[e], batch.geometry(e), batch.section, self.maps,
+                                         wrinkling=batch.wrinkling)
             f[e] = fe
             if want_tangent:
                 K[e] = Ke
@@ -226,9 +235,10 @@ class _AssumedStrains:
         (m, 36), the iteration matrices (m, 36, 36), the forces of the given stresses (m, 36)."""
         if batch.kernel == "numba":
             return internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, True, stress,
-                                                workspaces=self.workspaces)
+                                                workspaces=self.workspaces, wrinkling=batch.wrinkling)
         parts = [loops.force_tangent(batch.x[e], batch.frames[e], batch.geometry(e), batch.section,
-                                     self.maps, stress=stress[e]) for e in range(len(batch))]
+                                     self.maps, stress=stress[e], wrinkling=batch.wrinkling)
+                 for e in range(len(batch))]
         return tuple(np.array([p[k] for p in parts]) for k in range(3))
 
     def stress_forces(self, batch: ElementBatch, stress: np.ndarray) -> np.ndarray:
@@ -259,10 +269,11 @@ class _AssumedStrains:
         if strain_kernel == "numba":
             eps = element_strains_batch(batch.x, batch.frames, batch.e_ref, batch.to_cart, self.compressed_maps,
                                         workspaces=self.workspaces)
-            return _energy(batch.weights, eps, batch.section)
+            return _energy(batch.weights, eps, batch.section, batch.wrinkling)
         total = 0.0
         for e in range(len(batch)):
-            total += loops.strain_energy(batch.x[e], batch.frames[e], batch.geometry(e), batch.section, self.maps)
+            total += loops.strain_energy(batch.x[e], batch.frames[e], batch.geometry(e), batch.section, self.maps,
+                                         wrinkling=batch.wrinkling)
         return total
 
     def warm_up(self, batch: ElementBatch) -> None:
@@ -278,9 +289,10 @@ class _AssumedStrains:
 
     # -- one element, readable kernel ---------------------------------------------------------------------
     def element_force_tangent(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
-                              section: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Internal force (36,) and tangent (36, 36) of one element (numpy reference)."""
-        return loops.force_tangent(x, frames, geom, section, self.maps)
+                              section: np.ndarray, wrinkling: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Internal force (36,) and tangent (36, 36) of one element (numpy reference; ``wrinkling``: the
+        tension-field membrane law)."""
+        return loops.force_tangent(x, frames, geom, section, self.maps, wrinkling=wrinkling)
 
     def element_strains(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
                         bubble: np.ndarray | None = None) -> np.ndarray:
@@ -295,9 +307,9 @@ class _AssumedStrains:
         return loops.linearized_strains(x, frames, geom, dh, self.maps)
 
     def element_strain_energy(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
-                              section: np.ndarray) -> float:
-        """Elastic energy of one element (numpy reference)."""
-        return loops.strain_energy(x, frames, geom, section, self.maps)
+                              section: np.ndarray, wrinkling: bool = False) -> float:
+        """Elastic energy of one element (numpy reference; ``wrinkling``: the relaxed energy)."""
+        return loops.strain_energy(x, frames, geom, section, self.maps, wrinkling=wrinkling)
 
 
 @dataclass(frozen=True)
@@ -355,6 +367,7 @@ class MITC7:
     supports_mixed_iteration: ClassVar[bool] = False
     supports_stress_forces: ClassVar[bool] = False
     supports_linearized_stresses: ClassVar[bool] = False
+    supports_wrinkling: ClassVar[bool] = False
     condenses_bubble: ClassVar[bool] = True
 
     @property
@@ -380,6 +393,8 @@ class MITC7:
         """Condensed internal forces (m, 36) and tangents (m, 36, 36), the bubbles solved from the warm start
         ``batch.element_state`` and written back to it. An element whose bubble does not converge returns NaN
         (a non-finite residual stops Newton) and keeps its start value."""
+        if batch.wrinkling:
+            raise self._unavailable("the tension-field membrane law (wrinkling)")
         bubbles = batch.element_state
         if batch.kernel == "numba":
             f, K, b = condensed_force_tangent_batch(*batch.fast_arrays(), self.compressed_maps, bubbles,
@@ -433,8 +448,10 @@ class MITC7:
 
     # -- one element, readable kernel ---------------------------------------------------------------------
     def element_force_tangent(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
-                              section: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Condensed internal force (36,) and tangent (36, 36) of one element (numpy reference)."""
+                              section: np.ndarray, wrinkling: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """Condensed internal force (36,) and tangent (36, 36) of one element (numpy reference; no wrinkling)."""
+        if wrinkling:
+            raise self._unavailable("the tension-field membrane law (wrinkling)")
         return bubble.condensed_force_tangent(x, frames, geom, section)
 
     def element_strains(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
@@ -451,8 +468,10 @@ class MITC7:
         raise self._unavailable("linearized stresses")
 
     def element_strain_energy(self, x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
-                              section: np.ndarray) -> float:
-        """Elastic energy of one element at its condensed bubble (numpy reference)."""
+                              section: np.ndarray, wrinkling: bool = False) -> float:
+        """Elastic energy of one element at its condensed bubble (numpy reference; no wrinkling)."""
+        if wrinkling:
+            raise self._unavailable("the tension-field membrane law (wrinkling)")
         b = bubble.condensed_bubble(x, frames, geom, section)
         return loops.strain_energy(x, frames, geom, section, self.maps, b)
 

@@ -54,6 +54,7 @@ def test_names_keys_and_capabilities():
     for v in VARIANTS:
         mitc6_like = not isinstance(v, MITC7)
         assert v.supports_mixed_iteration == v.supports_stress_forces == v.supports_linearized_stresses == mitc6_like
+        assert v.supports_wrinkling == mitc6_like
         assert v.condenses_bubble == (not mitc6_like)
     assert len({MITC6(), MITC6(membrane="mean")}) == 1 and MITC6() != NoTying()
     with pytest.raises(AttributeError):

@@ -44,8 +44,8 @@ from flexbody.shell.geometry import N_GAUSS
 from flexbody.shell.kernels.congruence import _cross_terms, _finish_tangent, _force_to_local, _has_cross_coupling
 from flexbody.shell.kernels.geometric import _points_tangent
 from flexbody.shell.kernels.layout import NDOF, NZ, N_EVAL
-from flexbody.shell.kernels.material import (_gauss_strains, _given_stress_weights, _nonlocal_material, _section_cov,
-                                             _stress_weights)
+from flexbody.shell.kernels.material import (_gauss_strains, _given_stress_weights, _nonlocal_material,
+                                             _relaxed_stress_weights, _section_cov, _stress_weights)
 from flexbody.shell.kernels.points import (_force_points, _interpolate_points, _kinematics_points, _load_element,
                                            _node_setup, _point_coefficients, _strain_increments_points,
                                            _strains_points)
@@ -62,12 +62,15 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
            pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
            par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
            nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
-           want_tangent, use_stress, stress, f, fg, K,
+           want_tangent, use_stress, stress, wrinkling, f, fg, K,
            x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps,
            F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz,
            cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
-           t0, t1, t2, t3, t4, t5):
+           t0, t1, t2, t3, t4, t5, Ct):
     """Internal forces f[e] (and tangents K[e]) of the elements e0 <= e < e1.
+
+    With wrinkling the membrane follows the tension-field law (:func:`_relaxed_stress_weights`: its stresses
+    and point tangents C_t(eps_g) in Ps and Ch); otherwise the linear section C.
 
     With use_stress the geometric terms of the tangent carry the given stress resultants stress[e] instead
     of those of the strains (the mixed Newton iteration), and fg[e] receives the force of these stresses;
@@ -87,10 +90,14 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
         _point_coefficients(used, Pd, Pco)
         _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX)
         _strains_points(e, used, e_ref, PF, Pe)
-        if want_tangent:
-            _section_cov(e, to_cart, weights, C, cblk, CT, Ch)
-        _stress_weights(e, used, to_cart, weights, C, Ch, want_tangent, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v,
-                        Pe, cov, st, v16, Ps)
+        if wrinkling:
+            _relaxed_stress_weights(e, used, to_cart, weights, C, want_tangent, a_ptr, a_p, a_j, a_v,
+                                    at_ptr, at_g, at_i, at_v, Pe, cov, st, v16, Ct, CT, Ch, Ps)
+        else:
+            if want_tangent:
+                _section_cov(e, to_cart, weights, C, cblk, CT, Ch)
+            _stress_weights(e, used, to_cart, weights, C, Ch, want_tangent, a_ptr, a_p, a_j, a_v, at_ptr, at_g,
+                            at_i, at_v, Pe, cov, st, v16, Ps)
         _force_points(used, PF, PQ, PT, PR, PX, Ps, g, G2, phi, fz)
         _force_to_local(e, fz, fr, Ti, f)
         fv = f
@@ -132,7 +139,8 @@ def _workspaces(npar: int, n_rf: int) -> tuple:
             e((18, 18)), e((18, NZ)), e((NZ, 18)), e((NZ, NZ)), e((6, 8)), e((NZ, NZ)),     # core Y Yt Kz Kiso K1
             e((3, NDOF)), e((8, 12)), e((8, 18)), e((8, 18)),                               # T0 Dl Bl CBl
             e((n_rows, NZ)), e((max(n_rows, 8), NZ)), e((npar, npar)), e((8, npar)),        # Sp Wp Cp Yp
-            e((3, 3)), e((3, 3)), e((3, 3)), e((3, 3)), e((3, 3)), e((3, 3)))               # t0 .. t5
+            e((3, 3)), e((3, 3)), e((3, 3)), e((3, 3)), e((3, 3)), e((3, 3)),               # t0 .. t5
+            e((8, 8)))                                                                      # Ct
 
 
 @_numba.entry
@@ -177,7 +185,8 @@ def _element_arrays(x_el, frames_el, e_ref, to_cart, **more):
 def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref: np.ndarray,
                                  to_cart: np.ndarray, weights: np.ndarray, section: np.ndarray | SectionStiffness,
                                  A: np.ndarray | CompressedMaps, want_tangent: bool = True,
-                                 stress: np.ndarray | None = None, workspaces: Workspaces | None = None):
+                                 stress: np.ndarray | None = None, workspaces: Workspaces | None = None,
+                                 wrinkling: bool = False):
     """Internal forces (m, 36) and tangents (m, 36, 36) of m elements, per node [u, theta], local frames.
 
     Same result as :func:`flexbody.shell.reference.loops.internal_force_tangent` element by element.
@@ -197,6 +206,9 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
         (m, 36) the force of the given stresses (K None without want_tangent).
     workspaces : the kernels' per-thread scratch arrays, reused across calls (``ElementVariant.workspaces``);
         None: made for this call
+    wrinkling : the tension-field membrane law (``ShellMaterial.wrinkling``,
+        :func:`flexbody.shell.reference.material.relaxed_section`; the section's membrane block isotropic and
+        not coupled to the others) instead of the linear section
     """
     x_el, frames_el, e_ref, to_cart, weights = _element_arrays(x_el, frames_el, e_ref, to_cart,
                                                                weights=(weights, (N_GAUSS,)))
@@ -212,7 +224,7 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
     K = np.empty((m, NDOF, NDOF)) if want_tangent else np.empty((1, NDOF, NDOF))
     if m:
         args = (x_el, frames_el, e_ref, to_cart, weights, C, cblk, *maps.kernel_args(),
-                bool(want_tangent), use_stress, stress, f, fs, K)
+                bool(want_tangent), use_stress, stress, bool(wrinkling), f, fs, K)
         key, npar, n_rf = ("mitc6", maps.npar, maps.n_rf), maps.npar, maps.n_rf
         ws = workspaces if workspaces is not None else Workspaces()
         run_chunks(lambda e0, e1: _chunk(e0, e1, *args, *ws.get(key, lambda: _workspaces(npar, n_rf))), m,

@@ -7,9 +7,17 @@ through the compressed map of :class:`flexbody.shell.maps.CompressedMaps`), the 
 strains at the Gauss points (:func:`_section_cov`, :func:`_block_cov`) and the material stiffness of the
 nonlocal assumed-strain rows (:func:`_nonlocal_material`): one symmetric rank-npar update S^T (sum_g M_g^T C_g
 M_g) S per element, the rows S_k of the rotation-free (membrane) parameters W_k x.
+
+With the tension-field membrane law (``ShellMaterial.wrinkling``), :func:`_relaxed_stress_weights` takes the
+place of both :func:`_stress_weights` and :func:`_section_cov`: per Gauss point the Cartesian strains
+eps_g = T_g cov_g, the law (:func:`_tension_field`, the twin of
+:func:`flexbody.shell.reference.material.tension_field_membrane`) for the stresses sigma_g and the point tangent
+C_t(eps_g), then st_g = w_g T_g^T sigma_g and Ch_g = w_g T_g^T C_t T_g.
 """
 
 from __future__ import annotations
+
+import math
 
 from flexbody._numba import fast as jit, inline as inl, uint as _u
 from flexbody.shell.geometry import N_GAUSS
@@ -262,3 +270,103 @@ def _nonlocal_material(x, par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, 
     for a in range(n_rf, npar, 4):
         for c in range(3):
             _rank_update_block(Kz, _ZR + 8 * c, _u(_KR), Sp, Wp, a)
+
+
+@inl
+def _tension_field(e11, e22, g12, C, Ct, sig):
+    """The tension-field membrane law at one point (:func:`flexbody.shell.reference.material.tension_field_membrane`):
+    the membrane forces sig[0:3] and the tangent Ct[0:3, 0:3] of the strains [e11, e22, g12 = 2 e12], for the
+    isotropic membrane block C[0:3, 0:3] (taut: C eps and C; slack: zero; wrinkled: uniaxial tension)."""
+    c11 = C[0, 0]
+    c12 = C[0, 1]
+    Eh = c11 - c12 * c12 / c11
+    nu = c12 / c11
+    mean = 0.5 * (e11 + e22)
+    radius = math.hypot(0.5 * (e11 - e22), 0.5 * g12)
+    e1 = mean + radius
+    e2 = mean - radius
+    if e2 + nu * e1 > 0.0:                           # taut: the linear law
+        for r in range(3):
+            sig[r] = C[r, 0] * e11 + C[r, 1] * e22 + C[r, 2] * g12
+            for c in range(3):
+                Ct[r, c] = C[r, c]
+        return
+    if e1 <= 0.0:                                    # slack
+        for r in range(3):
+            sig[r] = 0.0
+            for c in range(3):
+                Ct[r, c] = 0.0
+        return
+    t = 0.5 * math.atan2(g12, e11 - e22)             # wrinkled: e1 - e2 >= (1 + nu) e1 > 0
+    n1 = math.cos(t)
+    n2 = math.sin(t)
+    m1 = -n2
+    m2 = n1
+    p0 = n1 * n1
+    p1 = n2 * n2
+    p2 = n1 * n2
+    q0 = 2.0 * n1 * m1
+    q1 = 2.0 * n2 * m2
+    q2 = n1 * m2 + n2 * m1
+    a = Eh * e1
+    b = a / (2.0 * (e1 - e2))
+    sig[0] = a * p0
+    sig[1] = a * p1
+    sig[2] = a * p2
+    Ct[0, 0] = Eh * p0 * p0 + b * q0 * q0
+    Ct[0, 1] = Eh * p0 * p1 + b * q0 * q1
+    Ct[0, 2] = Eh * p0 * p2 + b * q0 * q2
+    Ct[1, 1] = Eh * p1 * p1 + b * q1 * q1
+    Ct[1, 2] = Eh * p1 * p2 + b * q1 * q2
+    Ct[2, 2] = Eh * p2 * p2 + b * q2 * q2
+    Ct[1, 0] = Ct[0, 1]
+    Ct[2, 0] = Ct[0, 2]
+    Ct[2, 1] = Ct[1, 2]
+
+
+@jit
+def _relaxed_stress_weights(e, used, to_cart, weights, C, want_tangent, a_ptr, a_p, a_j, a_v,
+                            at_ptr, at_g, at_i, at_v, Pe, cov, st, v16, Ct, CT, Ch, Ps):
+    """The tension-field membrane's covariant stress weights Ps (as :func:`_stress_weights`) and, with
+    want_tangent, its covariant point tangents Ch_g = w_g T_g^T C_t(eps_g) T_g (as :func:`_section_cov`).
+
+    Per Gauss point: eps_g = T_g cov_g (v16[:8]), the law on the membrane block, C eps_g on the others
+    (bending and transverse shear stay linear; the section has no membrane coupling), st_g = w_g T_g^T sigma_g.
+    """
+    _assumed_cov(a_ptr, a_p, a_j, a_v, Pe, cov)
+    for gg in range(N_GAUSS):
+        w = weights[e, gg]
+        for r in range(8):
+            acc = 0.0
+            for c in range(8):
+                acc += to_cart[e, gg, r, c] * cov[gg, c]
+            v16[r] = acc
+        for r in range(8):
+            for c in range(8):
+                Ct[r, c] = C[r, c]
+        _tension_field(v16[0], v16[1], v16[2], C, Ct, v16[8:11])
+        for r in range(3, 8):
+            acc = 0.0
+            for c in range(8):
+                acc += C[r, c] * v16[c]
+            v16[8 + r] = acc
+        for c in range(8):
+            acc = 0.0
+            for r in range(8):
+                acc += to_cart[e, gg, r, c] * v16[8 + r]
+            st[gg, c] = w * acc
+        if not want_tangent:
+            continue
+        for r in range(8):
+            for c in range(8):
+                acc = 0.0
+                for k in range(8):
+                    acc += Ct[r, k] * to_cart[e, gg, k, c]
+                CT[r, c] = acc
+        for r in range(8):
+            for c in range(8):
+                acc = 0.0
+                for k in range(8):
+                    acc += to_cart[e, gg, k, r] * CT[k, c]
+                Ch[gg, r, c] = w * acc
+    _pull_back(used, at_ptr, at_g, at_i, at_v, st, Ps)

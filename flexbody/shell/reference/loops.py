@@ -21,7 +21,7 @@ from flexbody.shell.reference.expansion import covariant_B, gauss_B, gauss_force
 from flexbody.shell.reference.geometric import point_geometric_stiffness
 from flexbody.shell.reference.material import (cartesian_strains, gauss_strain_map, gauss_strain_maps,
                                                mapped_strains, material_stiffness, pulled_back_stress,
-                                               stress_resultants)
+                                               relaxed_section, section_stresses, stress_resultants)
 from flexbody.shell.reference.points import (PointKinematics, covariant_strains,
                                              evaluation_point_kinematics)
 
@@ -56,7 +56,7 @@ def element_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, A:
 
 
 def internal_force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,
-                           A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                           A: np.ndarray, wrinkling: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Internal force (36,) and tangent (36, 36) in the nodal local frames, per node [u, theta], of an element
     without a bubble (the MITC6 variants; MITC7's is
     :func:`flexbody.shell.reference.bubble.condensed_force_tangent`; ``ElementVariant.element_force_tangent``
@@ -68,8 +68,10 @@ def internal_force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeome
     geom : reference data from :func:`flexbody.shell.geometry.element_geometry`
     section : (8, 8) Cartesian section stiffness (``ShellMaterial.section()``)
     A : the assumed-strain map (:func:`flexbody.shell.reference.material.assumed_strain_maps`)
+    wrinkling : the tension-field membrane law (:func:`flexbody.shell.reference.material.relaxed_section`)
+        instead of the linear one
     """
-    return force_tangent(x, frames, geom, section, A)
+    return force_tangent(x, frames, geom, section, A, wrinkling=wrinkling)
 
 
 def linearized_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, dh: np.ndarray,
@@ -85,7 +87,7 @@ def linearized_strains(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry,
 
 def force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,
                   A: np.ndarray, bubble: np.ndarray | None = None,
-                  stress: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                  stress: np.ndarray | None = None, wrinkling: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Force and tangent for the assumed-strain map A (paper Eqs. 18, 22-24).
 
     A : (7, 8, 17, 8) (:func:`flexbody.shell.reference.material.assumed_strain_maps`, ``ElementVariant.maps``)
@@ -97,6 +99,10 @@ def force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, sect
         K = sum_g w_g B_g^T C B_g + G(stress); Magisano, Leonetti & Garcea 2017). The force is always the
         one of the strains; with a stress the result is (force, K, f_stress), f_stress = sum_g w_g B_g^T
         stress_g the force of the given stresses.
+    wrinkling : the tension-field membrane law at each Gauss point
+        (:func:`flexbody.shell.reference.material.relaxed_section`): its stresses and its point tangent C_t(eps_g)
+        take the place of C eps_g and C (the material stiffness w_g B_g^T C_t B_g). The law is not linear, so
+        the mixed iteration's stresses (``stress``) do not belong with it; the body does not offer them.
     """
     kin, e, B = point_strains(x, frames, geom, bubble)
     ndof = B.shape[2]
@@ -109,10 +115,13 @@ def force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, sect
         to_cart = gauss_strain_map(geom.to_cart[g], A[g])       # (8, 17*8): point strains -> Cartesian
         eps = to_cart @ e.ravel()
         B_g = gauss_B(to_cart, B)
-        sigma = stress_resultants(section, eps)                 # [N, M, Q] stress resultants
+        if wrinkling:
+            sigma, C_g = relaxed_section(eps, section)          # tension-field membrane, point tangent
+        else:
+            sigma, C_g = stress_resultants(section, eps), section   # [N, M, Q] stress resultants
         w = geom.weights[g]
         force += gauss_force(B_g, sigma, w)
-        K += material_stiffness(B_g, section, w)                # material stiffness (paper Eq. 23)
+        K += material_stiffness(B_g, C_g, w)                    # material stiffness (paper Eq. 23)
         carried = sigma if stress is None else stress[g]
         s_points += pulled_back_stress(to_cart, carried, w, e.shape)
         f_stress += gauss_force(B_g, carried, w)
@@ -124,7 +133,12 @@ def force_tangent(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, sect
 
 
 def strain_energy(x: np.ndarray, frames: np.ndarray, geom: ElementGeometry, section: np.ndarray,
-                  A: np.ndarray, bubble: np.ndarray | None = None) -> float:
-    """Elastic energy of the element, 1/2 sum_g w_g eps_g^T C eps_g (MITC7: pass the condensed bubble)."""
+                  A: np.ndarray, bubble: np.ndarray | None = None, wrinkling: bool = False) -> float:
+    """Elastic energy of the element, 1/2 sum_g w_g eps_g^T C eps_g (MITC7: pass the condensed bubble).
+
+    With ``wrinkling`` the relaxed energy 1/2 sum_g w_g eps_g^T sigma(eps_g) of the tension-field membrane (its
+    stresses are homogeneous of degree one in the strains, so this is the energy whose gradient they are)."""
     eps = element_strains(x, frames, geom, A, bubble)
+    if wrinkling:
+        return 0.5 * float(np.einsum("g,gi,gi->", geom.weights, eps, section_stresses(eps, section, True)))
     return 0.5 * float(np.einsum("g,gi,ij,gj->", geom.weights, eps, section, eps))
