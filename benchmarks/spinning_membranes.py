@@ -4,10 +4,11 @@
                                              [--thickness 1e-3,1e-6] [--mass consistent] [--out FILE]
                                              [--steps N] [--every K] [--rho-inf R] [--frame F]
                                              [--adaptive [--tolerance T]] [--integrator KEY=VALUE ...]
+                                             [--wrinkling]
 
-``--steps``, ``--every``, ``--rho-inf``, ``--frame``, ``--adaptive`` and ``--integrator`` leave the defaults (100 steps per revolution, a
-record every 10 steps, the scene's rho_inf and frame, fixed steps) for studies of the time step; the acceptance
-rows use none.
+``--steps``, ``--every``, ``--rho-inf``, ``--frame``, ``--adaptive``, ``--integrator`` and ``--wrinkling`` leave
+the defaults (100 steps per revolution, a record every 10 steps, the scene's rho_inf and frame, fixed steps, the
+linear membrane law) for studies; the acceptance rows use none (``--wrinkling``: the tension-field membrane law, docs/theory.md).
 
 Cases (all start on the steady spin, ``[analysis.initial] state = "steady_spin"``, at default settings):
 
@@ -56,6 +57,7 @@ young = 1e9
 poisson = 0.3
 thickness = {h}
 density = 1000.0
+wrinkling = {wrinkling}
 [analysis]
 type = "dynamic"
 dt = {dt}
@@ -170,6 +172,7 @@ def main() -> None:
     parser.add_argument("--tolerance", type=float, default=1e-5, help="adaptive: the local error tolerance")
     parser.add_argument("--rho-inf", type=float, default=None, help="the integrator's rho_inf (default: the scene's)")
     parser.add_argument("--frame", default=None, choices=("inertial", "turning"), help="default: the scene's")
+    parser.add_argument("--wrinkling", action="store_true", help="the tension-field membrane law ([material])")
     parser.add_argument("--integrator", action="append", default=[], metavar="KEY=VALUE",
                         help="an [analysis.integrator] setting (e.g. atol=1e-8), repeatable")
     parser.add_argument("--out", default=None)
@@ -184,7 +187,7 @@ def main() -> None:
         integrator.append(f"error_tolerance = {args.tolerance}")
     if integrator:
         options += "[analysis.integrator]\n" + "".join(f"{item}\n" for item in integrator)
-    extra = dict(every=args.every, options=options)
+    extra = dict(every=args.every, options=options, wrinkling=str(args.wrinkling).lower())
     rows = ["| case | DoFs | steps | iterations / step | factorizations / step | CPU s | rim w peak rad/s | outcome |",
             "|---|---|---|---|---|---|---|---|"]
     cells = [int(c) for c in args.cells.split(",")]
@@ -209,6 +212,8 @@ def main() -> None:
             overrides = {"dt": sail_period / 100, "end_time": args.revolutions * sail_period, "mass": args.mass}
             if args.frame is not None:
                 overrides["frame"] = args.frame
+            if args.wrinkling:
+                overrides["wrinkling"] = True
             rows.append(_run("10 m hexagonal sail, 4 rings, 2 rpm, 2 mN rim pulse",
                              lambda: load_toml_scene(SAIL, overrides), 2 * 2 * math.pi / 60, compression=True))
             print(rows[-1], flush=True)

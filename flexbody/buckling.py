@@ -81,6 +81,9 @@ def geometric_stiffness(model: Model, state, stress: np.ndarray, lam: float = 1.
     """K_G (free x free): the change of the tangent at ``state`` when the Gauss-point stresses ``stress``
     (m, 7, 8) act in the element's geometric terms and the loads at factor ``lam`` (their load stiffness),
     K(q, sigma, lam) - K(q, 0, 0) in the model's rows and columns. MITC6 bodies."""
+    if getattr(model.body.material, "wrinkling", False):
+        raise ValueError("linear buckling needs a linear membrane law: the tension-field (wrinkling) material "
+                         "has no geometric stiffness of given stresses (material wrinkling = true)")
     if not model.body.supports_mixed_iteration:
         raise ValueError("linear buckling needs an MITC6 element (the geometric stiffness of given stresses); "
                          f"{model.body.element_name} (tying = {model.body.element.key!r}) does not provide it")

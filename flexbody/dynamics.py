@@ -233,6 +233,10 @@ class DynamicModel:
         self._rot_index = index[self._rot_nodes, 3:5]
         if self.damping is not None and not isinstance(self.damping, RayleighDamping):
             raise ValueError(f"damping must be RayleighDamping or None, got {type(self.damping).__name__}")
+        if self.damping is not None and self.damping.beta_stiffness > 0 and m.body.material.wrinkling:
+            raise ValueError("stiffness-proportional damping (beta_stiffness > 0) is not available with the tension-"
+                             "field membrane (material wrinkling = true): its damping matrix B^T C B needs the "
+                             "geometric terms of given stresses, which that law does not provide")
         if self.damping is not None and self.damping.beta_stiffness > 0 and not m.body.supports_mixed_iteration:
             raise ValueError("stiffness-proportional damping (beta_stiffness > 0) needs the linearized stresses "
                              f"of an MITC6 element, not {m.body.element_name} (tying = {m.body.element.key!r})")

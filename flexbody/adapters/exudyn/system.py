@@ -108,6 +108,9 @@ def nearest(positions: np.ndarray, point: np.ndarray, size: float) -> np.ndarray
 def material(scene: Scene) -> tuple[float, float, float, float, float]:
     """(E, nu, h, rho, shear correction) of the scene's shell; rho 1 where the scene has no density."""
     m = scene.model.body.material
+    if m.wrinkling:
+        raise ValueError(f"scene {scene.name!r}: exudyn's reference elements have no tension-field (wrinkling) "
+                         "membrane law (material wrinkling = true)")
     return m.young, m.poisson, m.thickness, (m.density or 1.0), m.shear_correction
 
 
