@@ -410,3 +410,46 @@ def test_toml_key(tmp_path):
     with pytest.raises(SceneError) as info:
         scene('wrinkling = "yes"')
     assert "\n" not in str(info.value) and "wrinkling" in str(info.value)
+
+
+# -- whole solves and what the law refuses ------------------------------------------------------------------
+def test_the_sail_runs_with_the_tension_field_and_carries_no_compression():
+    """The 10 m sail (h/L = 1e-5, 2 rpm, rim pulse) started on its steady spin with the relaxed law: the steady
+    spin (a static solve, load control from rest) and the dynamic steps converge, and no Gauss point carries a
+    compressive principal membrane force (the linear law leaves most of them compressed after the pulse)."""
+    from pathlib import Path
+    from flexbody.scenes import load_toml_scene, run_scene
+    sail = Path(__file__).resolve().parents[2] / "examples" / "solar_sail_10m.toml"
+    def principal_forces(wrinkling):
+        scene = load_toml_scene(sail, {"wrinkling": wrinkling, "end_time": 6.0})
+        summary = run_scene(scene)
+        assert summary.result.converged, summary.result.message
+        n = scene.model.body.stresses(summary.result.state)[:, :, :3]
+        mean, radius = 0.5 * (n[..., 0] + n[..., 1]), np.hypot(0.5 * (n[..., 0] - n[..., 1]), n[..., 2])
+        return mean - radius, mean + radius
+
+    smallest, largest = principal_forces(True)
+    assert largest.max() > 0
+    assert smallest.min() > -1e-9 * largest.max()
+    linear_smallest, linear_largest = principal_forces(False)
+    assert np.mean(linear_smallest < 0) > 0.1                             # the linear law: compressed regions
+
+
+def test_buckling_damping_and_exudyn_refuse_the_tension_field_with_the_reason():
+    from flexbody.buckling import geometric_stiffness
+    from flexbody.constraints import Fix
+    from flexbody.dynamics import DynamicModel, RayleighDamping
+    mesh = generators.strip(1.0, 1.0, 2, 2)
+    body = ShellBody(mesh, ShellMaterial(1e6, 0.3, 1e-3, density=1.0, wrinkling=True))
+    model = Model(body, [Fix(mesh.node_set("clamped"), "all")], [])
+    state = model.initial_state()
+    with pytest.raises(ValueError, match="wrinkling"):
+        geometric_stiffness(model, state, np.zeros((mesh.n_elements, 7, 8)))
+    with pytest.raises(ValueError, match="wrinkling"):
+        DynamicModel(model, damping=RayleighDamping(beta_stiffness=1e-3))
+    DynamicModel(model, damping=RayleighDamping(alpha_mass=0.1))          # mass damping needs no stresses
+    pytest.importorskip("exudyn")
+    from types import SimpleNamespace
+    from flexbody.adapters.exudyn.system import material
+    with pytest.raises(ValueError, match="wrinkling"):
+        material(SimpleNamespace(name="film", model=model))
