@@ -32,7 +32,7 @@ SMALL: dict[str, list[str]] = {
     "cantilever_end_moment": [],
     "cantilever_end_shear": ["nx=2", "steps=3"],
     "slit_annular_plate": ["steps=2"],
-    "pullout_cylinder": ["steps=2"],
+    "pullout_cylinder": ["n_circ=4", "n_axial=2"],
     "hemisphere": ["steps=2"],
     "spinning_plate": ["nx=1", "ny=1", "end_time=0.004"],
     "spinning_membrane": ["end_time=0.004"],
