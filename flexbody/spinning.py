@@ -51,7 +51,8 @@ from flexbody.constraints import FixDirection
 from flexbody.dynamics import DynamicModel
 
 
-def _finite_vector(value, what: str) -> np.ndarray:
+def finite_vector(value, what: str) -> np.ndarray:
+    """``value`` as a finite 3-vector, or a ValueError naming ``what`` and the value."""
     v = np.asarray(value, dtype=float)
     if v.shape != (3,) or not np.all(np.isfinite(v)):
         raise ValueError(f"{what} must be a finite 3-vector, got {value!r}")
@@ -108,8 +109,8 @@ class SpinningModel:
     _index: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        self.omega = _finite_vector(self.omega, "the spin angular velocity")
-        self.center = _finite_vector(self.center, "the spin centre")
+        self.omega = finite_vector(self.omega, "the spin angular velocity")
+        self.center = finite_vector(self.center, "the spin centre")
         m = self.model
         index = -np.ones(6 * m.body.n_nodes, dtype=np.int64)
         index[m.free] = np.arange(m.n_dof)
@@ -305,12 +306,12 @@ def steady_spin(dynamic: DynamicModel, omega, center=None, *, time: float = 0.0,
     from integrators.newton import NewtonSettings
     from integrators.static import load_control
 
-    omega = _finite_vector(omega, "the spin angular velocity")
+    omega = finite_vector(omega, "the spin angular velocity")
     if not np.any(omega):
         raise ValueError("the spin angular velocity is zero: a steady spin needs omega != 0")
     if center is None:
         center = dynamic.rigid_inertia_tensor(dynamic.model.initial_state())[0]
-    center = _finite_vector(center, "the spin centre")
+    center = finite_vector(center, "the spin centre")
     if isinstance(n_steps, bool) or not isinstance(n_steps, (int, np.integer)) or not 1 <= n_steps <= 10_000:
         raise ValueError(f"n_steps must be an integer in 1..10000, got {n_steps!r}")
     check_constant_rate(dynamic, omega, center, time)
@@ -363,12 +364,12 @@ class SteadySpinStart:
     center: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
-        w = _finite_vector(self.angular_velocity, "the steady-spin angular velocity")
+        w = finite_vector(self.angular_velocity, "the steady-spin angular velocity")
         if not np.any(w):
             raise ValueError("the steady-spin angular velocity is zero: a steady spin needs omega != 0")
         object.__setattr__(self, "angular_velocity", tuple(float(v) for v in w))
         if self.center is not None:
-            object.__setattr__(self, "center", tuple(float(v) for v in _finite_vector(self.center,
+            object.__setattr__(self, "center", tuple(float(v) for v in finite_vector(self.center,
                                                                                      "the steady-spin centre")))
 
 

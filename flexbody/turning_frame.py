@@ -44,18 +44,8 @@ import scipy.sparse as sp
 
 from flexbody.body import ShellState
 from flexbody.dynamics import DynamicModel
-from flexbody.spinning import SpinningModel
-
-
-def _hat(w: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
-
-
-def _finite_vector(value, what: str) -> np.ndarray:
-    v = np.asarray(value, dtype=float)
-    if v.shape != (3,) or not np.all(np.isfinite(v)):
-        raise ValueError(f"{what} must be a finite 3-vector, got {value!r}")
-    return v
+from flexbody.lie import so3
+from flexbody.spinning import SpinningModel, finite_vector
 
 
 @dataclass(frozen=True)
@@ -67,19 +57,15 @@ class TurningFrame:
     center: np.ndarray
 
     def __post_init__(self) -> None:
-        w = _finite_vector(self.omega, "the turning frame's angular velocity")
+        w = finite_vector(self.omega, "the turning frame's angular velocity")
         if not np.any(w):
             raise ValueError("the turning frame's angular velocity is zero: use the inertial frame")
         object.__setattr__(self, "omega", w)
-        object.__setattr__(self, "center", _finite_vector(self.center, "the turning frame's centre"))
+        object.__setattr__(self, "center", finite_vector(self.center, "the turning frame's centre"))
 
     def rotation(self, t: float) -> np.ndarray:
-        """Q(t) = exp(t hat(omega)) (Rodrigues), the frame's orientation at time t."""
-        w = float(np.linalg.norm(self.omega))
-        k = self.omega / w
-        K = _hat(k)
-        a = w * t
-        return np.eye(3) + np.sin(a) * K + (1.0 - np.cos(a)) * (K @ K)
+        """Q(t) = exp(t hat(omega)), the frame's orientation at time t."""
+        return so3.exp(t * self.omega)
 
 
 class TurningFrameModel:
@@ -103,7 +89,7 @@ class TurningFrameModel:
         self._translations = self._translation_map()
         S = dynamic.body_mass.scalar
         T = self._translations
-        self._coriolis_translations = (2.0 * (T.T @ sp.kron(S, _hat(frame.omega)) @ T)).tocsc()
+        self._coriolis_translations = (2.0 * (T.T @ sp.kron(S, so3.hat(frame.omega)) @ T)).tocsc()
         self._rot = np.flatnonzero(~dynamic.is_translation)
 
     # -- checks --------------------------------------------------------------------------------------------
