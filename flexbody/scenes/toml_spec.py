@@ -438,16 +438,18 @@ PLANE = TableSpec("plane", (
 
 
 def _settings_spec(path: str, settings: type, doc: str, skip: tuple[str, ...] = (),
-                   integers: dict[str, Any] | None = None, bound: str = "") -> TableSpec:
+                   integers: dict[str, Any] | None = None, bound: str = "",
+                   bounds: dict[str, str] | None = None) -> TableSpec:
     """The spec of a table whose keys are the fields of a settings dataclass (integers >= ``minimum``, other
-    numbers within ``bound``)."""
+    numbers within ``bound``, or within ``bounds[name]`` for the fields named there)."""
     keys = []
     for f in fields(settings):
         if f.name in skip:
             continue
         kind = {bool: "boolean", int: "integer", str: "string"}.get(f.default.__class__, "number")
+        number_bound = (bounds or {}).get(f.name, bound)
         keys.append(Key(f.name, kind, f"`{settings.__name__}.{f.name}`", default=None,
-                        minimum=(integers or {}).get("minimum", 1), bound=bound if kind == "number" else "",
+                        minimum=(integers or {}).get("minimum", 1), bound=number_bound if kind == "number" else "",
                         shown=f"`{toml_text(f.default)}`" if f.default is not None else "none"))
     return TableSpec(path, tuple(keys), doc)
 
@@ -472,8 +474,12 @@ def integrator_spec() -> TableSpec:
                           "local position error per adaptive step as a fraction of the model size; `min_step`, "
                           "`max_step` in s; docs/dynamics.md, \"Adaptive time steps\"; `contraction_floor`: with 0.3 "
                           "no step is accepted on an optimistic contraction estimate, docs/dynamics.md, \"Spinning "
-                          "membranes at real scale\"); integers >= 0, every number > 0",
-                          skip=("rho_inf", "policy", "adaptive"), integers={"minimum": 0}, bound=">0")
+                          "membranes at real scale\"; `local_error_fraction`: an iterate is also accepted when its "
+                          "error is below this fraction of the step's local error estimate, 0 iterates to `rtol` and "
+                          "`atol` only, docs/dynamics.md, \"Iteration error against the local error\"); integers >= 0, "
+                          "`contraction_floor` and `local_error_fraction` >= 0 (0: off), every other number > 0",
+                          skip=("rho_inf", "policy", "adaptive"), integers={"minimum": 0}, bound=">0",
+                          bounds={"contraction_floor": ">=0", "local_error_fraction": ">=0"})
 
 
 def all_specs() -> tuple[TableSpec, ...]:
