@@ -393,12 +393,12 @@ def test_contraction_floor_accepts_only_converged_iterates():
         AlphaSettings(contraction_floor=1.0)
 
 
-@pytest.mark.parametrize("speed, fraction", [(0.2, 0.01), (2.0, 0.1)])
-def test_the_iteration_error_is_a_small_fraction_of_the_discretization_error(speed, fraction):
+@pytest.mark.parametrize("speed", [0.2, 2.0])
+def test_the_iteration_error_is_a_small_fraction_of_the_discretization_error(speed):
     """With the local-error test (``local_error_fraction``, default 0.3) a step stops iterating once its iteration
     error is small against its own local error: the answer moves from the tightly converged one by a small
-    fraction of the difference between steps h and h/2 (measured 0.3 % and 3.7 % at 0.2 and 2 m/s), for a third
-    fewer iterations (100 -> 63, 137 -> 92) and no more factorizations than the tolerances alone."""
+    fraction of the difference between steps h and h/2 (measured 0.26 % and 0.06 % at 0.2 and 2 m/s), for 30-40 %
+    fewer iterations (100 -> 63, 137 -> 98) and no more factorizations than the tolerances alone."""
     mesh, dyn = cantilever()
     period = 2 * math.pi / beam_omega1()
     v0 = mode1_velocity(mesh, dyn, speed)
@@ -412,7 +412,7 @@ def test_the_iteration_error_is_a_small_fraction_of_the_discretization_error(spe
     tight, half = run(period / 40, **exact), run(period / 80, **exact)
     tolerances, default = run(period / 40, local_error_fraction=0.0), run(period / 40)
     discretization = np.abs(tight.state.x - half.state.x).max()
-    assert np.abs(default.state.x - tight.state.x).max() < fraction * discretization
+    assert np.abs(default.state.x - tight.state.x).max() < 0.01 * discretization
     assert default.stats.iterations < 0.75 * tolerances.stats.iterations
     assert default.stats.factorizations <= tolerances.stats.factorizations
     with pytest.raises(ValueError, match="local_error_fraction"):
