@@ -18,9 +18,10 @@ bodies)::
   consistent), and on the two director rotations of a node of inertia j diag(1, 1, 0) with Omega_l = R^T Omega:
   2 j (t . Omega) (-w_2, w_1). Both are skew: they do no work. (From J wdot + w x J w with w = w_r + Omega_l and
   d/dt Omega_l = -w_r x Omega_l; the drilling row is not a DoF.)
-* f_d: Rayleigh damping on the relative velocity. Its stiffness part acts on strain rates, which a rigid
-  velocity does not change, so it is the inertial one; its mass part a0 M v damps the motion relative to the
-  turning frame (in the inertial frame it would also brake the spin itself).
+* f_d: stiffness-proportional Rayleigh damping on the relative velocity. It acts on strain rates, which a rigid
+  velocity does not change, so it is the inertial one. Mass-proportional damping a0 M v acts on the inertial
+  velocity and brakes the spin itself: the steady spin is then no relative equilibrium, and the turning frame
+  refuses it (the default is then the inertial frame), so that a run's answer never depends on its frame.
 
 Why: the rigid motion of a node on a circle is not a motion the generalized-alpha predictor or its iteration
 treat exactly on R^3 x SO(3). In the inertial frame the predicted membrane lags its clamped hub by a rigid
@@ -85,6 +86,7 @@ class TurningFrameModel:
         self.dynamic, self.frame = dynamic, frame
         self._check_loads()
         self._check_prescribed(times)
+        self._check_damping()
         self.spin = SpinningModel(dynamic, frame.omega, frame.center)
         self._translations = self._translation_map()
         S = dynamic.body_mass.scalar
@@ -110,6 +112,16 @@ class TurningFrameModel:
                         raise ValueError(f"turning frame: a dead nodal {what} {getattr(load, what).tolist()} (nodes "
                                          f"{load.nodes[:3].tolist()}...) is not along the spin axis: it would turn in "
                                          f"that frame; use the inertial frame or a follower load")
+
+    def _check_damping(self) -> None:
+        """Mass-proportional damping a0 M v acts on the inertial velocity, the spin included (it brakes a free
+        body's spin and loads a driven hub): the steady spin is then no relative equilibrium, and damping the
+        velocity relative to the frame instead would make the answer depend on the frame."""
+        damping = self.dynamic.damping
+        if damping is not None and damping.alpha_mass > 0:
+            raise ValueError(f"turning frame: mass-proportional damping (alpha_mass = {damping.alpha_mass:g} 1/s) "
+                             "damps the spin too, so the steady spin is no equilibrium in that frame: use the "
+                             "inertial frame, or stiffness-proportional damping only")
 
     def _check_prescribed(self, times) -> None:
         c = self.frame.center

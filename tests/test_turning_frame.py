@@ -220,6 +220,14 @@ def test_the_frame_is_chosen_and_refused_with_the_reason(tmp_path):
         TurningFrameModel(other, TurningFrame(OMEGA, np.zeros(3)), times=(0.0, 0.1))
     with pytest.raises(ValueError, match="angular velocity is zero"):
         TurningFrame(np.zeros(3), np.zeros(3))
+    # mass-proportional damping brakes the spin itself: the default is the inertial frame, "turning" is refused;
+    # stiffness-proportional damping acts on strain rates only and keeps the turning frame
+    damped = '[analysis.damping]\nalpha_mass = 0.5'
+    assert run_scene(annulus_scene(PERIOD / 50, PERIOD / 50, damped, kick=0.0)).frame == "inertial"
+    with pytest.raises(ValueError, match="mass-proportional damping"):
+        run_scene(annulus_scene(PERIOD / 50, PERIOD / 50, 'frame = "turning"\n' + damped, kick=0.0))
+    stiff = '[analysis.damping]\nbeta_stiffness = 1e-5'
+    assert run_scene(annulus_scene(PERIOD / 50, PERIOD / 50, stiff, kick=0.0)).frame == "turning"
     # the TOML key names its values
     with pytest.raises(SceneError, match="frame.*'rotating'"):
         annulus_scene(PERIOD / 50, PERIOD / 50, 'frame = "rotating"')
