@@ -245,7 +245,7 @@ class _AssumedStrains:
         """The forces sum_g w_g B_g^T stress_g (m, 36) of given Gauss-point stresses (m, 7, 8), no tangent."""
         if batch.kernel == "numba":
             return internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, False, stress,
-                                                workspaces=self.workspaces)[2]
+                                                workspaces=self.workspaces, wrinkling=batch.wrinkling)[2]
         return self.mixed_forces(batch, stress)[2]
 
     def linearized_strains(self, batch: ElementBatch, dh: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -277,13 +277,11 @@ class _AssumedStrains:
         return total
 
     def warm_up(self, batch: ElementBatch) -> None:
-        """Compile (or load) the numba kernels this variant uses, on the batch (one element is enough)."""
-        internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, True,
-                                     workspaces=self.workspaces)
-        internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, False,
-                                     workspaces=self.workspaces)
-        internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, False,
-                                     np.zeros((len(batch), N_GAUSS, 8)), workspaces=self.workspaces)
+        """Compile (or load) the numba kernels this variant uses, on the batch (one element is enough): the
+        element loop's specialisation with the tension-field law when ``batch.wrinkling``, else without it."""
+        for want_tangent, stress in ((True, None), (False, None), (False, np.zeros((len(batch), N_GAUSS, 8)))):
+            internal_force_tangent_batch(*batch.checked_arrays(), self.compressed_maps, want_tangent, stress,
+                                         workspaces=self.workspaces, wrinkling=batch.wrinkling)
         linearized_strains_batch(batch.x, batch.frames, batch.e_ref, batch.to_cart, self.compressed_maps,
                                  np.zeros((len(batch), 36)), workspaces=self.workspaces)
 

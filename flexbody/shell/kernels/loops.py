@@ -62,15 +62,17 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
            pt_gauss, loc_rows, n_loc, loc_ptr, loc_i, loc_j, loc_v,
            par_p, par_ptr, par_j, par_v, pl_ptr, pl_k, pl_v, w2, has_w, n_rf,
            nl_rows, n_nl, m_ptr, m_i, m_k, m_v, m_dense,
-           want_tangent, use_stress, stress, wrinkling, f, fg, K,
+           want_tangent, use_stress, stress, f, fg, K,
            x, fr, dn, Ti, ninv, Pd, Pda, Pco, PQ, PT, PR, PF, PX, Pe, Ps,
            F, Q, T, R, X0, X1, d, da, co, s, g, G2, phi, fz,
            cov, st, Ch, CT, v16, core, Y, Yt, Kz, Kiso, K1, T0, Dl, Bl, CBl, Sp, Wp, Cp, Yp,
            t0, t1, t2, t3, t4, t5, Ct):
     """Internal forces f[e] (and tangents K[e]) of the elements e0 <= e < e1.
 
-    With wrinkling the membrane follows the tension-field law (:func:`_relaxed_stress_weights`: its stresses
-    and point tangents C_t(eps_g) in Ps and Ch); otherwise the linear section C.
+    With a scratch Ct (8, 8) the membrane follows the tension-field law (:func:`_relaxed_stress_weights`: its
+    stresses and point tangents C_t(eps_g) in Ps and Ch); with Ct None the linear section C. Ct None is typed
+    ``none``: numba prunes the branch ``Ct is not None`` before typing, so the specialisation without the law
+    neither types nor lowers it (a run-time bool compiled the law into every scene's first run).
 
     With use_stress the geometric terms of the tangent carry the given stress resultants stress[e] instead
     of those of the strains (the mixed Newton iteration), and fg[e] receives the force of these stresses;
@@ -90,7 +92,7 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
         _point_coefficients(used, Pd, Pco)
         _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX)
         _strains_points(e, used, e_ref, PF, Pe)
-        if wrinkling:
+        if Ct is not None:
             _relaxed_stress_weights(e, used, to_cart, weights, C, want_tangent, a_ptr, a_p, a_j, a_v,
                                     at_ptr, at_g, at_i, at_v, Pe, cov, st, v16, Ct, CT, Ch, Ps)
         else:
@@ -123,8 +125,8 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
 
 
 def _workspaces(npar: int, n_rf: int) -> tuple:
-    """The scratch arrays of one :func:`_chunk` call, in the order of its trailing arguments (x ... t5),
-    reused for every element of the chunk. ``npar``: nonlocal parameters (rows of the rank update), ``n_rf``
+    """The scratch arrays of one :func:`_chunk` call, in the order of its trailing arguments (x ... Ct; the
+    call passes None for Ct without the tension-field law), reused for every element of the chunk. ``npar``: nonlocal parameters (rows of the rank update), ``n_rf``
     of them rotation-free."""
     npar = max(npar, 1)
     n_rows = max(4 * ((npar + 3) // 4), n_rf + 4 * ((npar - n_rf + 3) // 4))
@@ -224,11 +226,16 @@ def internal_force_tangent_batch(x_el: np.ndarray, frames_el: np.ndarray, e_ref:
     K = np.empty((m, NDOF, NDOF)) if want_tangent else np.empty((1, NDOF, NDOF))
     if m:
         args = (x_el, frames_el, e_ref, to_cart, weights, C, cblk, *maps.kernel_args(),
-                bool(want_tangent), use_stress, stress, bool(wrinkling), f, fs, K)
+                bool(want_tangent), use_stress, stress, f, fs, K)
         key, npar, n_rf = ("mitc6", maps.npar, maps.n_rf), maps.npar, maps.n_rf
         ws = workspaces if workspaces is not None else Workspaces()
-        run_chunks(lambda e0, e1: _chunk(e0, e1, *args, *ws.get(key, lambda: _workspaces(npar, n_rf))), m,
-                   _n_chunks(m))
+        law = bool(wrinkling)
+
+        def chunk(e0: int, e1: int) -> None:
+            scratch = ws.get(key, lambda: _workspaces(npar, n_rf))
+            _chunk(e0, e1, *args, *scratch[:-1], scratch[-1] if law else None)
+
+        run_chunks(chunk, m, _n_chunks(m))
     if use_stress:
         return f, (K if want_tangent else None), fs
     return f, (K if want_tangent else None)
