@@ -281,7 +281,8 @@ class ShellBody:
         conn = self.mesh.elements[:1]
         ref = self.reference
         self.element.warm_up(ElementBatch(self.mesh.nodes[conn].astype(float), self.frames0[conn], ref.e_ref[:1],
-                                          ref.to_cart[:1], ref.weights[:1], self.material.section()))
+                                          ref.to_cart[:1], ref.weights[:1], self.material.section(),
+                                          wrinkling=self.material.wrinkling))
 
     def strain_energy(self, state: ShellState, strain_kernel: str = "reference") -> float:
         """Elastic energy of the body, 1/2 sum_g w_g eps^T C eps (the tension-field membrane: its relaxed energy,
