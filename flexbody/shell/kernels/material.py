@@ -38,16 +38,32 @@ def _assumed_cov(a_ptr, a_p, a_j, a_v, Pe, cov):
             cov[gg, i] = acc
 
 
+@inl
+def _cartesian_strains(e, gg, to_cart, cov, eps):
+    """eps[r] = (T_g cov_g)[r], r < 8: the Cartesian strains of Gauss point gg (eps: 8 or more entries)."""
+    for r in range(8):
+        acc = 0.0
+        for c in range(8):
+            acc += to_cart[e, gg, r, c] * cov[gg, c]
+        eps[r] = acc
+
+
+@inl
+def _covariant_stress(e, gg, to_cart, w, v16, st):
+    """st[gg, c] = w (T_g^T sigma_g)[c] of the Cartesian stresses sigma_g in v16[8:16]."""
+    for c in range(8):
+        acc = 0.0
+        for r in range(8):
+            acc += to_cart[e, gg, r, c] * v16[8 + r]
+        st[gg, c] = w * acc
+
+
 @jit
 def _gauss_strains(e, to_cart, a_ptr, a_p, a_j, a_v, at_ptr, at_g, at_i, at_v, Pe, cov, out):
     """Assumed covariant strains at the Gauss points and their Cartesian components out[e] (7, 8)."""
     _assumed_cov(a_ptr, a_p, a_j, a_v, Pe, cov)
     for gg in range(N_GAUSS):
-        for r in range(8):
-            acc = 0.0
-            for c in range(8):
-                acc += to_cart[e, gg, r, c] * cov[gg, c]
-            out[e, gg, r] = acc
+        _cartesian_strains(e, gg, to_cart, cov, out[e, gg])
 
 
 @jit
@@ -67,21 +83,13 @@ def _stress_weights(e, used, to_cart, weights, C, Ch, use_ch, a_ptr, a_p, a_j, a
                 st[gg, r] = acc
             continue
         w = weights[e, gg]
-        for r in range(8):
-            acc = 0.0
-            for c in range(8):
-                acc += to_cart[e, gg, r, c] * cov[gg, c]
-            v16[r] = acc
+        _cartesian_strains(e, gg, to_cart, cov, v16)
         for r in range(8):
             acc = 0.0
             for c in range(8):
                 acc += C[r, c] * v16[c]
             v16[8 + r] = w * acc
-        for c in range(8):
-            acc = 0.0
-            for r in range(8):
-                acc += to_cart[e, gg, r, c] * v16[8 + r]
-            st[gg, c] = acc
+        _covariant_stress(e, gg, to_cart, 1.0, v16, st)
     _pull_back(used, at_ptr, at_g, at_i, at_v, st, Ps)
 
 
@@ -336,11 +344,7 @@ def _relaxed_stress_weights(e, used, to_cart, weights, C, want_tangent, a_ptr, a
     _assumed_cov(a_ptr, a_p, a_j, a_v, Pe, cov)
     for gg in range(N_GAUSS):
         w = weights[e, gg]
-        for r in range(8):
-            acc = 0.0
-            for c in range(8):
-                acc += to_cart[e, gg, r, c] * cov[gg, c]
-            v16[r] = acc
+        _cartesian_strains(e, gg, to_cart, cov, v16)
         for r in range(8):
             for c in range(8):
                 Ct[r, c] = C[r, c]
@@ -350,11 +354,7 @@ def _relaxed_stress_weights(e, used, to_cart, weights, C, want_tangent, a_ptr, a
             for c in range(8):
                 acc += C[r, c] * v16[c]
             v16[8 + r] = acc
-        for c in range(8):
-            acc = 0.0
-            for r in range(8):
-                acc += to_cart[e, gg, r, c] * v16[8 + r]
-            st[gg, c] = w * acc
+        _covariant_stress(e, gg, to_cart, w, v16, st)
         if not want_tangent:
             continue
         for r in range(8):
