@@ -199,6 +199,31 @@ def test_numba_kernel_matches_reference(geometry, variant):
         assert abs(fast.strain_energy(state, "numba") - slow.strain_energy(state)) <= 1e-12 * slow.strain_energy(state)
 
 
+def element_loop_calls_the_law(scratch_type) -> bool:
+    """Whether the element loop still calls the law after numba's pruning of the branches on its arguments'
+    types (the pass that runs before typing), its wrinkling scratch Ct (the last argument) of scratch_type."""
+    from numba import types
+    from numba.core import ir
+    from numba.core.analysis import dead_branch_prune
+    from numba.core.compiler import run_frontend
+    from flexbody.shell.kernels import loops, material
+
+    func_ir = run_frontend(loops._chunk.py_func)
+    dead_branch_prune(func_ir, (types.float64[:, ::1],) * (func_ir.arg_count - 1) + (scratch_type,))
+    return any(isinstance(stmt, ir.Assign) and isinstance(stmt.value, (ir.Global, ir.FreeVar))
+               and stmt.value.value is material._relaxed_stress_weights
+               for block in func_ir.blocks.values() for stmt in block.body)
+
+
+def test_the_element_loop_without_the_law_does_not_compile_it():
+    """Without wrinkling the law's branch is gone before typing, so a scene without it never compiles it
+    (its first run's compilation); with the scratch array it stays."""
+    from numba import types
+
+    assert element_loop_calls_the_law(types.float64[:, ::1])
+    assert not element_loop_calls_the_law(types.none)
+
+
 def element_tangent_error(x, fr, geom, C, variant) -> float:
     K = variant.element_force_tangent(x, fr, geom, C, wrinkling=True)[1]
     Kfd = fd_tangent(lambda xx, ff: variant.element_force_tangent(xx, ff, geom, C, wrinkling=True)[0], x, fr)
