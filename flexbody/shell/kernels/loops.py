@@ -126,8 +126,8 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
 
 def _workspaces(npar: int, n_rf: int) -> tuple:
     """The scratch arrays of one :func:`_chunk` call, in the order of its trailing arguments (x ... Ct; the
-    call passes None for Ct without the tension-field law), reused for every element of the chunk. ``npar``: nonlocal parameters (rows of the rank update), ``n_rf``
-    of them rotation-free."""
+    call passes None for Ct without the tension-field law), reused for every element of the chunk. ``npar``:
+    nonlocal parameters (rows of the rank update), ``n_rf`` of them rotation-free."""
     npar = max(npar, 1)
     n_rows = max(4 * ((npar + 3) // 4), n_rf + 4 * ((npar - n_rf + 3) // 4))
     e = np.empty
