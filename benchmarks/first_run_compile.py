@@ -35,9 +35,9 @@ SMALL: dict[str, list[str]] = {
     "pullout_cylinder": ["n_circ=4", "n_axial=2"],
     "hemisphere": ["steps=2"],
     "spinning_plate": ["nx=1", "ny=1", "end_time=0.004"],
-    "spinning_membrane": ["end_time=0.004"],
-    "spinning_sail": ["end_time=0.004"],
-    "tumbling_plate": ["end_time=0.004"],
+    "spinning_membrane": ["ramp_time=0.002", "end_time=0.004"],
+    "spinning_sail": ["ramp_time=0.002", "end_time=0.004"],
+    "tumbling_plate": ["end_time=0.01"],
     "swinging_strip": ["end_time=0.004"],
 }
 
