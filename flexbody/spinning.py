@@ -107,6 +107,8 @@ class SpinningModel:
     center: np.ndarray
     load_factor_time: float = 0.0
     _index: np.ndarray = field(init=False, repr=False)
+    _rows: np.ndarray = field(init=False, repr=False)       # _row_maps(), constant
+    _turning: np.ndarray = field(init=False, repr=False)    # _moving() as 0/1 masses, constant
 
     def __post_init__(self) -> None:
         self.omega = finite_vector(self.omega, "the spin angular velocity")
@@ -115,6 +117,8 @@ class SpinningModel:
         index = -np.ones(6 * m.body.n_nodes, dtype=np.int64)
         index[m.free] = np.arange(m.n_dof)
         self._index = index.reshape(-1, 6)
+        self._rows = self._row_maps()
+        self._turning = self._moving().astype(float)
 
     # -- the static-model contract of the integrators ------------------------------------------------------
     @property
@@ -172,8 +176,8 @@ class SpinningModel:
         """f_c on the free DoFs (the model's row layout): centrifugal forces and director moments."""
         bm = self.dynamic.body_mass
         f6 = np.zeros((self.model.body.n_nodes, 6))
-        f = bm.scalar @ centrifugal_forces(self._moving().astype(float), state.x, self.omega, self.center)
-        f6[:, :3] = np.einsum("nij,nj->ni", self._row_maps(), f)
+        f = bm.scalar @ centrifugal_forces(self._turning, state.x, self.omega, self.center)
+        f6[:, :3] = np.einsum("nij,nj->ni", self._rows, f)
         f6[:, 3:5] = director_spin_moments(bm.rotary, state.frames, self.omega)
         return f6.ravel()[self.model.free]
 
@@ -186,7 +190,7 @@ class SpinningModel:
         cols[m.has_basis] = m.basis[m.has_basis]
         S = bm.scalar.tocoo()                            # blocks S_IJ E_I^T A R_J, one per entry (I, J) of S
         I, J = S.row, S.col
-        trans = S.data[:, None, None] * np.einsum("nij,jk,nkl->nil", self._row_maps()[I], A, cols[J])
+        trans = S.data[:, None, None] * np.einsum("nij,jk,nkl->nil", self._rows[I], A, cols[J])
         rot = director_spin_moment_tangent(bm.rotary, state.frames, self.omega)
         nodes = np.arange(m.body.n_nodes)
         rows, colidx, vals = [], [], []
