@@ -211,11 +211,19 @@ def main() -> None:
                 print(rows[-1], flush=True)
         elif case == "sail":                                   # examples/solar_sail_10m.toml, 2 rpm
             sail_period = 60.0 / 2
-            overrides = {"dt": sail_period / 100, "end_time": args.revolutions * sail_period, "mass": args.mass}
+            overrides = {"dt": sail_period / args.steps, "end_time": args.revolutions * sail_period, "mass": args.mass,
+                         "output_every": args.every}
             if args.frame is not None:
                 overrides["frame"] = args.frame
             if args.wrinkling:
                 overrides["wrinkling"] = True
+            if args.rho_inf is not None:
+                overrides["rho_inf"] = args.rho_inf
+            if args.adaptive:
+                overrides["adaptive"] = True
+            for item in integrator:                        # "key = value" (TOML values), the --integrator settings
+                key, value = item.split("=", 1)
+                overrides[f"analysis.integrator.{key.strip()}"] = tomllib.loads(f"v = {value}")["v"]
             rows.append(_run("10 m hexagonal sail, 4 rings, 2 rpm, 2 mN rim pulse",
                              lambda: load_toml_scene(SAIL, overrides), 2 * 2 * math.pi / 60, compression=True))
             print(rows[-1], flush=True)
