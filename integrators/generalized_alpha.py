@@ -54,6 +54,7 @@ the estimate assumes no better contraction than the floor for what is left; the 
 value (a kept matrix may contract that slowly before it is refreshed). Measured (docs/dynamics.md, "Spinning
 membranes at real scale"): with 0.3 the swinging strip's energy drift is the same to 0.3 % with either predictor
 there, at 1.6x the iterations per step of the default.
+
 Iteration error against the local error (``local_error_fraction`` kappa, default 0.3; 0: off). The tolerances
 above ask the same of every step; but an iteration error far below the step's own discretization error buys
 nothing (Hairer & Wanner, Solving ODE II, IV.8: the Newton tolerance of an implicit integrator is a fraction of
@@ -65,9 +66,8 @@ iteration); there eta_k takes theta_k >= ``refresh_ratio`` (the contraction a ke
 ratio measures the resolved stiff part of the predictor's error, see "Contraction floor"). The iteration error
 then stays a small fraction of the discretization error: measured on a cantilever at h = T/40
 (tests/integrators/test_generalized_alpha.py) 0.26 % and 0.06 % of the difference between h and h/2, at 63 and 98
-instead of 100 and 137 iterations; on the kicked
-hub annulus of docs/dynamics.md 1.9 % over two revolutions, at 2.33 instead of 2.83 iterations and 0.13 instead
-of 0.25 factorizations per step. A converged step no longer satisfies the tolerances exactly: conserved quantities
+instead of 100 and 137 iterations; on the kicked hub annulus of docs/dynamics.md 1.9 % over two revolutions, at
+2.33 instead of 2.83 iterations and 0.13 instead of 0.25 factorizations per step. A converged step no longer satisfies the tolerances exactly: conserved quantities
 hold to the iteration error (a run that must meet rtol/atol, or compares iteration schemes, sets 0), and a
 restart, which starts on a fresh matrix, follows the uninterrupted run to the iteration error.
 
