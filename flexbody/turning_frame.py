@@ -168,6 +168,16 @@ class TurningFrameModel:
     def mass_matrix(self) -> sp.csc_matrix:
         return self.dynamic.mass_matrix()
 
+    def transfer(self, state_ref: ShellState, state: ShellState):
+        """The map of an old iteration matrix to ``state``: :meth:`DynamicModel.transfer` in the frame's
+        coordinates (the body hardly turns against the frame; what remains is the tilt of the directors as the
+        membrane swings, which the kept matrix cannot follow without it). An approximation for the frame's
+        terms as well: the Coriolis and centrifugal tangents are turned with the nodes."""
+        return self.dynamic.transfer(state_ref, state)
+
+    def apply_transfer(self, vec: np.ndarray, transfer, transpose: bool = False) -> np.ndarray:
+        return self.dynamic.apply_transfer(vec, transfer, transpose)
+
     def _director_spin(self, state: ShellState) -> np.ndarray:
         """2 j_I (t_I . Omega) at the rotational DoFs' nodes (the Coriolis coefficient of the directors)."""
         d = self.dynamic

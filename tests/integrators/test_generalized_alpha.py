@@ -393,12 +393,14 @@ def test_contraction_floor_accepts_only_converged_iterates():
         AlphaSettings(contraction_floor=1.0)
 
 
-@pytest.mark.parametrize("speed", [0.2, 2.0])
-def test_the_iteration_error_is_a_small_fraction_of_the_discretization_error(speed):
+@pytest.mark.parametrize("speed, saving", [(0.2, 0.75), (2.0, 0.9)])
+def test_the_iteration_error_is_a_small_fraction_of_the_discretization_error(speed, saving):
     """With the local-error test (``local_error_fraction``, default 0.3) a step stops iterating once its iteration
     error is small against its own local error: the answer moves from the tightly converged one by a small
-    fraction of the difference between steps h and h/2 (measured 0.26 % and 0.06 % at 0.2 and 2 m/s), for 30-40 %
-    fewer iterations (100 -> 63, 137 -> 98) and no more factorizations than the tolerances alone."""
+    fraction of the difference between steps h and h/2 (measured 0.36 % and 0.003 % at 0.2 and 2 m/s), for fewer
+    iterations (96 -> 71 and 105 -> 88) and no more factorizations (3 -> 1, 23 -> 23) than the tolerances alone.
+    (At 2 m/s the saving was 137 -> 98 while the kept matrix followed only the body's rotation; carried along
+    the directors' tilt, DynamicModel.transfer, it converges faster on its own, and less is left to save.)"""
     mesh, dyn = cantilever()
     period = 2 * math.pi / beam_omega1()
     v0 = mode1_velocity(mesh, dyn, speed)
@@ -413,7 +415,7 @@ def test_the_iteration_error_is_a_small_fraction_of_the_discretization_error(spe
     tolerances, default = run(period / 40, local_error_fraction=0.0), run(period / 40)
     discretization = np.abs(tight.state.x - half.state.x).max()
     assert np.abs(default.state.x - tight.state.x).max() < 0.01 * discretization
-    assert default.stats.iterations < 0.75 * tolerances.stats.iterations
+    assert default.stats.iterations < saving * tolerances.stats.iterations
     assert default.stats.factorizations <= tolerances.stats.factorizations
     with pytest.raises(ValueError, match="local_error_fraction"):
         AlphaSettings(local_error_fraction=1.5)
