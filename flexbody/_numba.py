@@ -3,8 +3,9 @@ private API.
 
 Decorators (all cached in :data:`flexbody.kernel_cache.CACHE_DIR` when it is usable):
 
-- :data:`plain`: numba's defaults (reference counting, Python error model, no fastmath). Kernels that
-  allocate (workspaces, results) and the small SO(3)/SE(3) building blocks of :mod:`flexbody.lie.kernels`.
+- :data:`plain`: numba's defaults (reference counting, Python error model, no fastmath), set explicitly
+  (:data:`PLAIN_FLAGS`, below). Kernels that allocate (workspaces, results) and the small SO(3)/SE(3)
+  building blocks of :mod:`flexbody.lie.kernels` for plain callers.
 - :data:`released`: :data:`plain` that releases the GIL (the sparse scatter, called from threads).
 - :data:`fast`: the per-element and per-point kernels, which allocate nothing: :data:`FAST_FLAGS`, i.e.
   numpy's error model (a division by zero gives inf/nan, no exception check), FMA contraction allowed
@@ -18,6 +19,15 @@ Decorators (all cached in :data:`flexbody.kernel_cache.CACHE_DIR` when it is usa
 - :data:`parallel`: numba's defaults plus ``parallel=True`` (no flexbody kernel uses it now).
 - :func:`prefetch`: an intrinsic that prefetches the cache line of one array element (a hint, never a fault).
 - :data:`uint`: ``numba.uint64``, for unsigned inner-loop indices with run-time bounds (lets LLVM vectorize).
+- :func:`twin`: a second dispatcher of one Python function under another policy (its callees re-bound to their
+  twins), so that a helper called from kernels of both policies is compiled under each once, by one source.
+
+One set of flags per dispatcher: numba compiles a callee the first time a caller's compilation needs it, and
+a flag the callee leaves unset (``nrt``, ``fastmath``, ``error_model``: :data:`INHERITED`) is then taken from
+that caller; the callee's machine code (cached, and linked into every later caller) would depend on which
+caller was compiled first, hence on the compile order and the cache state. So every decorator here sets the
+:data:`INHERITED` flags itself, and a helper that both :data:`fast` and :data:`plain` kernels call has a
+:func:`twin` for each (``tests/test_numba_policy.py`` checks both).
 
 ``noalias``: numba has a compiler flag that declares the data pointers of array arguments ``noalias`` (its
 parfors lowering sets it), but no jit option maps to it. This module adds that mapping (``_noalias``) to
@@ -37,6 +47,7 @@ checks that the flags reach the compiled code.
 
 from __future__ import annotations
 
+import types
 import warnings
 
 import llvmlite.binding
@@ -84,6 +95,15 @@ NOALIAS: bool = hasattr(numba.core.compiler.Flags, "noalias") and hasattr(numba.
 if NOALIAS and not hasattr(numba.core.cpu.CPUTargetOptions, "_noalias"):
     numba.core.cpu.CPUTargetOptions._noalias = numba.core.options.TargetOptions.Mapping("noalias")
 
+#: the flags that numba's ``CPUTargetOptions.finalize`` takes from the caller when a callee leaves them unset
+#: (jit option names; ``forceinline`` too, which no flexbody kernel sets anywhere)
+INHERITED = ("_nrt", "fastmath", "error_model") if NO_NRT else ("fastmath", "error_model")
+
+#: the jit options of the kernels with numba's defaults, set explicitly (:data:`INHERITED`)
+PLAIN_FLAGS: dict = dict(cache=CACHE, error_model="python", fastmath=False)
+if NO_NRT:
+    PLAIN_FLAGS["_nrt"] = True
+
 #: the jit options of the allocation-free kernels (module docstring)
 FAST_FLAGS: dict = dict(cache=CACHE, error_model="numpy", fastmath={"contract"})
 if NO_NRT:
@@ -91,13 +111,33 @@ if NO_NRT:
 if NOALIAS:
     FAST_FLAGS["_noalias"] = True
 
-plain = numba.njit(cache=CACHE)
-released = numba.njit(cache=CACHE, nogil=True)
+plain = numba.njit(**PLAIN_FLAGS)
+released = numba.njit(nogil=True, **PLAIN_FLAGS)
 fast = numba.njit(**FAST_FLAGS)
 inline = numba.njit(inline="always", **FAST_FLAGS)
 entry = numba.njit(nogil=True, **FAST_FLAGS)
-parallel = numba.njit(cache=CACHE, parallel=True)
+parallel = numba.njit(parallel=True, **PLAIN_FLAGS)
 uint = numba.uint64
+
+
+def twin(decorator, dispatcher, name: str, **callees):
+    """``decorator`` (:data:`fast`, ...) applied to the Python function of ``dispatcher``, as ``name``.
+
+    The function is copied with its globals, the names in ``callees`` re-bound (to the twins of the
+    dispatchers it calls, so that they too are compiled under the twin's policy). ``name`` becomes its
+    ``__name__`` and ``__qualname__``: numba names a function's cache files for its module, qualified name
+    and first line, and the twin's machine code must not share them with the original's (numba's cache
+    index does not tell the flags apart). The copy's globals are those of the module when ``twin`` is
+    called: make the twin after everything its function refers to.
+    """
+    func = dispatcher.py_func
+    namespace = dict(func.__globals__)
+    namespace.update(callees)
+    copy = types.FunctionType(func.__code__, namespace, name, func.__defaults__, func.__closure__)
+    copy.__qualname__ = name
+    copy.__doc__ = func.__doc__
+    copy.__kwdefaults__ = func.__kwdefaults__
+    return decorator(copy)
 
 # llvm.prefetch is overloaded on the pointer type: "p0" with opaque pointers (LLVM >= 15), "p0i8" before
 _PREFETCH_NAME = "llvm.prefetch.p0" if llvmlite.binding.llvm_version_info >= (15,) else "llvm.prefetch.p0i8"

@@ -16,6 +16,16 @@ The ``*_co_into`` maps take their coefficients (``coefficients``, or ``point_coe
 (:mod:`flexbody.shell.kernels`, :mod:`flexbody.shell.kernels.mitc7`) compute them once per point and inline
 these maps; this module is the only numba code of the SO(3) coefficients and derivative formulas.
 
+Twins: the helpers that the element kernels (:data:`flexbody._numba.fast`) call and the plain code
+(:func:`update_frames_into`, the MITC7 node setup) calls too are compiled twice from one source
+(:func:`flexbody._numba.twin`): ``coefficients``, ``log_into``, ``d_tangent_inv_into`` and the helpers they
+call under numba's defaults for plain callers, and as ``<name>_fast`` under the fast policy for the element
+kernels (``point_coefficients_into`` and ``inverse_coefficients``, inlined into the element kernels, call
+``coefficients_fast``). One dispatcher is thus compiled under one set of flags only, whichever kernel is
+compiled first and whatever is cached (a callee compiled for a caller takes the flags it leaves unset from
+that caller: :mod:`flexbody._numba`); the fast twins give the element kernels FMA contraction and no
+reference counting in these helpers too.
+
 The Taylor coefficients are taken from ``so3.SERIES`` and frozen into the compiled code; the cache directory
 is named for a digest of all kernel sources (:mod:`flexbody.kernel_cache`), so an edit of ``so3.py``
 recompiles them.
@@ -41,6 +51,11 @@ jit = _numba.plain  # numba's defaults (flexbody._numba)
 inline = _numba.inline  # inlined into the callers (numba IR), which compile it with their own flags
 
 
+def _fast_twin(dispatcher, **callees):
+    """The twin of a helper for the fast element kernels: ``<name>_fast`` (:func:`flexbody._numba.twin`)."""
+    return _numba.twin(_numba.fast, dispatcher, f"{dispatcher.__name__}_fast", **callees)
+
+
 # ----------------------------------------------------------------------------------------------------------
 # Small helpers
 # ----------------------------------------------------------------------------------------------------------
@@ -53,6 +68,9 @@ def _horner(c, x):
     for k in range(c.shape[0] - 1, -1, -1):
         s = s * x + c[k]
     return s
+
+
+_horner_fast = _fast_twin(_horner)
 
 
 @jit
@@ -68,6 +86,9 @@ def _cross(a, b):
 @jit
 def _norm(v):
     return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+
+
+_norm_fast = _fast_twin(_norm)
 
 
 @jit
@@ -119,6 +140,9 @@ def coefficients(p):
     return a1, a2, a3, a4, c2, c3, c4, e2, e3
 
 
+coefficients_fast = _fast_twin(coefficients, _horner=_horner_fast)
+
+
 @inline
 def point_coefficients_into(p, co):
     """co[:9] = :func:`coefficients` at ``p``, except a4 and c4 (co[3], co[6]), which are 0 below the series
@@ -150,7 +174,7 @@ def point_coefficients_into(p, co):
         co[7] = e2
         co[8] = e3
     else:
-        cf = coefficients(p)
+        cf = coefficients_fast(p)
         for j in range(9):
             co[j] = cf[j]
 
@@ -166,7 +190,7 @@ def inverse_coefficients(p):
             a4 = a4 * x + _A4[j]
             c4 = c4 * x + _C4[j]
         return a4, c4
-    cf = coefficients(p)
+    cf = coefficients_fast(p)
     return cf[3], cf[6]
 
 
@@ -434,6 +458,9 @@ def log_into(R, out):
     out[0], out[1], out[2] = scale * x, scale * y, scale * z
 
 
+log_into_fast = _fast_twin(log_into)
+
+
 @jit
 def tangent_into(phi, out):
     """out = T(phi) = (1 - a3 p^2) I - a2 W + a3 phi phi^T."""
@@ -457,6 +484,9 @@ def d_tangent_inv_into(phi, b, out):
     """out = X with (D T^-1(phi)[v]) b = X v (:func:`d_tangent_inv_co_into`)."""
     cf = coefficients(_norm(phi))
     d_tangent_inv_co_into(phi, b, cf[3], cf[6], out)
+
+
+d_tangent_inv_into_fast = _fast_twin(d_tangent_inv_into, coefficients=coefficients_fast, _norm=_norm_fast)
 
 
 @jit

@@ -43,7 +43,7 @@ def _node_setup(fr, dn, Ti, ninv, M):
         for r in range(3):
             for c in range(3):
                 M[r, c] = fr[0, 0, r] * fr[i, 0, c] + fr[0, 1, r] * fr[i, 1, c] + fr[0, 2, r] * fr[i, 2, c]
-        lk.log_into(M, dn[i])
+        lk.log_into_fast(M, dn[i])
         d0 = dn[i, 0]
         d1 = dn[i, 1]
         d2 = dn[i, 2]

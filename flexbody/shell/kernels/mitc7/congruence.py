@@ -95,10 +95,10 @@ def nodal_terms_into(fa, fz, dn, Ti, Tm, E, M, Ka):
             E[i, k] = fz[z0 + k]
         for sign in range(2):
             if sign == 0:                            # rows theta_I: - D T^-1(-d_I)[.] E_I JdI
-                lk.d_tangent_inv_into((-dn[i, 0], -dn[i, 1], -dn[i, 2]), E[i], M)
+                lk.d_tangent_inv_into_fast((-dn[i, 0], -dn[i, 1], -dn[i, 2]), E[i], M)
                 r0 = 6 * i + 3
             else:                                    # rows theta_0: - D T^-1(d_I)[.] E_I JdI
-                lk.d_tangent_inv_into(dn[i], E[i], M)
+                lk.d_tangent_inv_into_fast(dn[i], E[i], M)
                 r0 = 3
             for k in range(3):
                 for l in range(3):

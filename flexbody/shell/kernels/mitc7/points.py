@@ -74,7 +74,7 @@ def kinematics_and_stresses(e, b, x, fr, dn, e_ref, to_cart, weights, C, a_ptr, 
             da[0, k] = acc0
             da[1, k] = acc1
         Q, T, R, F, co = PQ[p], PT[p], PR[p], PF[p], Pco[p]
-        lk.point_coefficients_into(lk._norm(d), co)
+        lk.point_coefficients_into(lk._norm_fast(d), co)
         lk.exp_co_into(d, co, Q)
         lk.tangent_co_into(d, co, T)
         for k in range(3):
