@@ -45,7 +45,7 @@ import scipy.sparse as sp
 
 from flexbody.assembly import Model
 from flexbody.body import ShellState
-from flexbody.lie import so3
+from flexbody.frames import node_patches, patch_rotations
 from flexbody.shell.inertia import (NodalInertia, ShellMass, check_mass_kind, nodal_inertia, shell_mass,
                                     with_point_masses)
 
@@ -232,6 +232,7 @@ class DynamicModel:
         self._col_index = index[nodes, :3]          # (k, 3), all >= 0 (a non-basis node frees all three)
         self._rot_nodes = np.flatnonzero(np.all(index[:, 3:5] >= 0, axis=1))
         self._rot_index = index[self._rot_nodes, 3:5]
+        self._patches = node_patches(m.body.mesh.elements, m.body.n_nodes)
         if self.damping is not None and not isinstance(self.damping, RayleighDamping):
             raise ValueError(f"damping must be RayleighDamping or None, got {type(self.damping).__name__}")
         if self.damping is not None and self.damping.beta_stiffness > 0 and m.body.material.wrinkling:
@@ -489,32 +490,33 @@ class DynamicModel:
         return U @ np.diag([1.0, 1.0, d]) @ Vt
 
     def transfer(self, state_ref: ShellState, state: ShellState) -> tuple[np.ndarray, np.ndarray]:
-        """The map P of DoF components from ``state_ref`` to ``state``: node by node, the body's rigid rotation
-        and the tilt of the node's director.
+        """The map P of DoF components from ``state_ref`` to ``state``: node by node, the rotation of the node's
+        patch.
 
         Under a rigid rotation Q of a free body (x -> Q x, R_I -> Q R_I D_I, D_I a drilling rotation: the
         frames are parallel-transported, so they turn about their directors relative to the body), the
         stiffness in these coordinates transforms as K -> P K P^T with P = Q on the fixed-direction
         translations (nodes without a constraint basis) and P = D_I^T (its in-plane 2 x 2 block) on the local
-        rotations; the mass is invariant (lumped: diagonal; consistent: S x I_3 commutes with Q on every node,
-        and the director part is j_I times the identity). An old factorization of M beta' + K then serves through P.
+        rotations, D_I = R_I,ref^T Q^T R_I; the mass is invariant (lumped: diagonal; consistent: S x I_3 commutes
+        with Q on every node, and the director part is j_I times the identity). An old factorization of
+        M beta' + K then serves through P.
 
-        A deforming body also tilts each director against the body: node by node, G_I = T_I Q replaces Q, with
-        T_I the minimal rotation from Q d_I (the director at ``state_ref``, turned with the body) to d_I
-        (:func:`flexbody.lie.so3.align_many`), and D_I = (R_I^T G_I R_I,ref)^T projected on the plane. The
-        element tangents in the nodal frames change only with the strains, while the fixed-direction
-        translations turn with the nodes: without T_I, a director tilted by phi since the factorization mixes
-        phi times the membrane stiffness into the soft transverse directions of a thin shell, and the kept matrix
-        stalls (the kicked 4 x 32 hub annulus, h/R 1e-3, three revolutions in the turning frame: 0.120 fresh
-        matrices per step without T_I, 0.017 with it). T_I is the identity under rigid motion, which stays exact;
-        otherwise P is an approximation, used only in the iteration matrix (a lumped mass stays invariant, a
-        consistent one to the tilt between neighbours).
+        A deforming body turns each part of its surface differently: node by node, G_I, the rotation of the
+        node's patch (the nodes it shares an element with, :func:`flexbody.frames.patch_rotations`), replaces Q
+        (G_I = Q under rigid motion, which stays exact). The element tangents in their local frames change only
+        with the strains, while the fixed-direction translations turn with the surface: with one Q for all, a
+        surface tilted by phi since the factorization mixes phi times the membrane stiffness into the soft
+        transverse directions of a thin shell, and the kept matrix stalls. Measured (docs/dynamics.md): the
+        kicked 4 x 32 hub annulus, three revolutions in the turning frame, 0.120 fresh matrices per step with one
+        Q, 0.017 with the directors' tilts, 0.010 with the patches' rotations; the 10 m sail (one revolution,
+        linear law, its buckled film kinked at the mesh scale) 0.253, 0.454 (the directors of a kinked film are
+        not the rotation of its elements) and 0.151. Otherwise P is an approximation, used only in the iteration
+        matrix (a lumped mass stays invariant, a consistent one to the turn between neighbours).
 
         Returns G_I (k, 3, 3) of the nodes with free fixed-direction translations and the 2 x 2 blocks D_I^T of
         the nodes with both rotations free (k, 2, 2).
         """
-        Q = self.body_rotation(state_ref.x, state.x)
-        G = so3.align_many(state_ref.frames[:, :, 2] @ Q.T, state.frames[:, :, 2]) @ Q      # T_I Q, (n, 3, 3)
+        G = patch_rotations(self._patches, state_ref.x, state.x)
         nodes = self._rot_nodes
         D = np.einsum("nji,nkj,nkl->nil", state_ref.frames[nodes], G[nodes], state.frames[nodes])  # R_ref^T G^T R
         D2 = D[:, :2, :2]

@@ -1,4 +1,5 @@
-"""Nodal reference frames R_I = [t1, t2, n] of a shell from its directors.
+"""Nodal reference frames R_I = [t1, t2, n] of a shell from its directors, and the rotation of each node's
+patch between two configurations.
 
 The nodal frames carry no drilling DoF, but their in-plane orientation enters the relative-rotation
 interpolation, so the field t1 must be smooth: t1 is a fixed axis projected onto the tangent plane.
@@ -7,7 +8,10 @@ The default axis is the global axis least aligned with any director.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
+import scipy.sparse as sp
 
 
 def unit_vector(vector, name: str) -> np.ndarray:
@@ -71,3 +75,45 @@ def align_frame(frame: np.ndarray, direction: np.ndarray, node: int) -> tuple[np
             return frame, k
     t1 = direction
     return np.column_stack([t1, np.cross(n, t1), n]), 0
+
+
+@dataclass(frozen=True)
+class NodePatches:
+    """The patch of each node: the nodes it shares an element with, as the directed edges (node, neighbour)
+    ``nodes[k]``, ``neighbours[k]``, and the (n, edges) 0/1 matrix ``gather`` that sums edge values per node."""
+
+    nodes: np.ndarray
+    neighbours: np.ndarray
+    gather: sp.csr_matrix
+
+
+def node_patches(elements: np.ndarray, n_nodes: int) -> NodePatches:
+    """The :class:`NodePatches` of a mesh with connectivity ``elements`` (m, k)."""
+    elements = np.asarray(elements)
+    k = elements.shape[1]
+    pairs = np.stack([np.repeat(elements, k, axis=1).ravel(), np.tile(elements, (1, k)).ravel()], axis=1)
+    pairs = np.unique(pairs[pairs[:, 0] != pairs[:, 1]], axis=0)   # each neighbour once, however many elements
+    n_pairs = len(pairs)
+    gather = sp.csr_matrix((np.ones(n_pairs), (pairs[:, 0], np.arange(n_pairs))), shape=(n_nodes, n_pairs))
+    return NodePatches(pairs[:, 0], pairs[:, 1], gather)
+
+
+def patch_rotations(patches: NodePatches, x_ref: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The rotations G_I (n, 3, 3) that best map each node's patch from ``x_ref`` onto ``x``.
+
+    G_I minimizes sum_J |G (x_J,ref - x_I,ref) - (x_J - x_I)|^2 over the nodes J of the patch of I (Kabsch:
+    with H_I = sum_J (x_J - x_I)(x_J,ref - x_I,ref)^T = U S V^T, G_I = U diag(1, 1, det(U V^T)) V^T; the edges
+    are differences of nearby positions, so a body far from the origin loses no digits). The edges of a patch
+    of a shell span its tangent plane, which fixes the rotation. Under a rigid motion every G_I is the body's
+    rotation; under a smooth deformation, the rotation of the surface around the node (its tilt, and its turn
+    in its plane). A patch whose edges do not span a plane (none in a mesh of non-degenerate elements) gets
+    the identity.
+    """
+    I, J = patches.nodes, patches.neighbours
+    edges, edges_ref = x[J] - x[I], x_ref[J] - x_ref[I]
+    H = (patches.gather @ np.einsum("ki,kj->kij", edges, edges_ref).reshape(-1, 9)).reshape(-1, 3, 3)
+    U, S, Vt = np.linalg.svd(H)
+    U[:, :, 2] *= np.where(np.linalg.det(U @ Vt) < 0.0, -1.0, 1.0)[:, None]
+    G = U @ Vt
+    G[~(S[:, 1] > 1e-12 * S[:, 0])] = np.eye(3)
+    return G

@@ -170,7 +170,7 @@ class TurningFrameModel:
 
     def transfer(self, state_ref: ShellState, state: ShellState):
         """The map of an old iteration matrix to ``state``: :meth:`DynamicModel.transfer` in the frame's
-        coordinates (the body hardly turns against the frame; what remains is the tilt of the directors as the
+        coordinates (the body hardly turns against the frame; what remains is the turn of the surface as the
         membrane swings, which the kept matrix cannot follow without it). An approximation for the frame's
         terms as well: the Coriolis and centrifugal tangents are turned with the nodes."""
         return self.dynamic.transfer(state_ref, state)

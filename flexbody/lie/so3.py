@@ -320,28 +320,6 @@ def director(R: np.ndarray) -> np.ndarray:
     return R[:, 2].copy()
 
 
-def align_many(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """The minimal rotations taking the unit vectors a (..., 3) to b (..., 3), (..., 3, 3): about a x b by the
-    angle between them, exp(atan2(|a x b|, a . b) (a x b) / |a x b|) (the parallel transport of a frame along the
-    great circle from a to b). For b = -a every axis normal to a is minimal: the one of ``a x e_k``, e_k the
-    coordinate axis least aligned with a, is taken.
-
-    Near b = -a the direction of a x b is round-off, but any axis normal to a turns a onto b to within the
-    angle's distance from pi times that round-off: the axis is made normal to a, not only taken from a x b.
-    """
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    shape = np.broadcast_shapes(a.shape, b.shape)
-    a, b = np.broadcast_to(a, shape).reshape(-1, 3), np.broadcast_to(b, shape).reshape(-1, 3)
-    v = np.cross(a, b)
-    angle = np.arctan2(np.linalg.norm(v, axis=-1), np.einsum("ni,ni->n", a, b))
-    axis = v - np.einsum("ni,ni->n", v, a)[:, None] * a
-    size = np.linalg.norm(axis, axis=-1)
-    normal = np.cross(a, np.eye(3)[np.argmin(np.abs(a), axis=-1)])
-    axis = np.where((size > 0.0)[:, None], axis / np.where(size > 0.0, size, 1.0)[:, None],
-                    normal / np.linalg.norm(normal, axis=-1, keepdims=True))
-    return exp_many(angle[:, None] * axis).reshape(shape[:-1] + (3, 3))
-
-
 # ----------------------------------------------------------------------------------------------------------
 # The maps for many rotation vectors / matrices at once (numpy, same formulas as the single versions)
 # ----------------------------------------------------------------------------------------------------------

@@ -236,10 +236,10 @@ def test_internal_force_is_the_energy_gradient_along_the_5dof_update(rng):
 def test_transfer_follows_the_tilt_of_the_directors_of_a_bending_plate(increment, limit):
     """A thin clamped plate bent to w = 0.05 x^2 (iteration matrix S1 = K + M / (beta h^2) made there), then bent
     further by ``increment`` x^2: the modified Newton iteration on the old matrix contracts at the spectral
-    radius of I - S^-1 S2, S = S1 as it is or carried with P (per node: the body's rotation and the director's
-    tilt, DynamicModel.transfer). The tilt carries a good part of the change (measured radii 0.060 -> 0.036,
-    0.332 -> 0.195, 1.248 -> 0.693), which keeps a kept matrix converging on a swinging membrane
-    (docs/dynamics.md: 0.120 -> 0.017 fresh matrices per step on the kicked hub annulus)."""
+    radius of I - S^-1 S2, S = S1 as it is or carried with P (per node: the rotation of its patch,
+    DynamicModel.transfer). The turn of the surface carries a good part of the change (measured radii
+    0.060 -> 0.036, 0.332 -> 0.195, 1.248 -> 0.693), which keeps a kept matrix converging on a swinging membrane
+    (docs/dynamics.md: 0.120 -> 0.010 fresh matrices per step on the kicked hub annulus)."""
     mesh = generators.strip(1.0, 0.5, 4, 2)
     dyn = DynamicModel(Model(ShellBody(mesh, ShellMaterial(1e9, 0.3, 1e-3, density=1000.0)),
                              [Fix(mesh.node_sets["clamped"], "all")]))
