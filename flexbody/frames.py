@@ -13,6 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from flexbody.lie import kernels
+
 
 def unit_vector(vector, name: str) -> np.ndarray:
     """``vector / |vector|`` for a user direction (a plane normal, an axis, an output direction).
@@ -80,10 +82,10 @@ def align_frame(frame: np.ndarray, direction: np.ndarray, node: int) -> tuple[np
 @dataclass(frozen=True)
 class NodePatches:
     """The patch of each node: the nodes it shares an element with, as the directed edges (node, neighbour)
-    ``nodes[k]``, ``neighbours[k]``, and the (n, edges) 0/1 matrix ``gather`` that sums edge values per node."""
+    of the (edges, n) difference matrix ``edges`` (x_neighbour - x_node per row) and the (n, edges) 0/1 matrix
+    ``gather`` that sums edge values per node."""
 
-    nodes: np.ndarray
-    neighbours: np.ndarray
+    edges: sp.csr_matrix
     gather: sp.csr_matrix
 
 
@@ -93,27 +95,32 @@ def node_patches(elements: np.ndarray, n_nodes: int) -> NodePatches:
     k = elements.shape[1]
     pairs = np.stack([np.repeat(elements, k, axis=1).ravel(), np.tile(elements, (1, k)).ravel()], axis=1)
     pairs = np.unique(pairs[pairs[:, 0] != pairs[:, 1]], axis=0)   # each neighbour once, however many elements
-    n_pairs = len(pairs)
-    gather = sp.csr_matrix((np.ones(n_pairs), (pairs[:, 0], np.arange(n_pairs))), shape=(n_nodes, n_pairs))
-    return NodePatches(pairs[:, 0], pairs[:, 1], gather)
+    n_pairs, rows = len(pairs), np.arange(len(pairs))
+    edges = sp.csr_matrix((np.r_[-np.ones(n_pairs), np.ones(n_pairs)], (np.r_[rows, rows], pairs.T.ravel())),
+                          shape=(n_pairs, n_nodes))
+    gather = sp.csr_matrix((np.ones(n_pairs), (pairs[:, 0], rows)), shape=(n_nodes, n_pairs))
+    return NodePatches(edges, gather)
+
+
+def patch_covariances(patches: NodePatches, x_ref: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """H_I = sum_J (x_J - x_I)(x_J,ref - x_I,ref)^T over the nodes J of the patch of I, (n, 3, 3): the edges are
+    differences of nearby positions, so a body far from the origin loses no digits."""
+    e, e_ref = patches.edges @ x, patches.edges @ x_ref
+    return (patches.gather @ (e[:, :, None] * e_ref[:, None, :]).reshape(-1, 9)).reshape(-1, 3, 3)
 
 
 def patch_rotations(patches: NodePatches, x_ref: np.ndarray, x: np.ndarray) -> np.ndarray:
     """The rotations G_I (n, 3, 3) that best map each node's patch from ``x_ref`` onto ``x``.
 
-    G_I minimizes sum_J |G (x_J,ref - x_I,ref) - (x_J - x_I)|^2 over the nodes J of the patch of I (Kabsch:
-    with H_I = sum_J (x_J - x_I)(x_J,ref - x_I,ref)^T = U S V^T, G_I = U diag(1, 1, det(U V^T)) V^T; the edges
-    are differences of nearby positions, so a body far from the origin loses no digits). The edges of a patch
+    G_I minimizes sum_J |G (x_J,ref - x_I,ref) - (x_J - x_I)|^2 over the nodes J of the patch of I: the rotation
+    nearest to :func:`patch_covariances` H_I (Kabsch; :func:`flexbody.lie.kernels.nearest_rotations_into`,
+    Horn's quaternion, equal to :func:`flexbody.lie.so3.nearest_rotations` to round-off). The edges of a patch
     of a shell span its tangent plane, which fixes the rotation. Under a rigid motion every G_I is the body's
     rotation; under a smooth deformation, the rotation of the surface around the node (its tilt, and its turn
     in its plane). A patch whose edges do not span a plane (none in a mesh of non-degenerate elements) gets
     the identity.
     """
-    I, J = patches.nodes, patches.neighbours
-    edges, edges_ref = x[J] - x[I], x_ref[J] - x_ref[I]
-    H = (patches.gather @ np.einsum("ki,kj->kij", edges, edges_ref).reshape(-1, 9)).reshape(-1, 3, 3)
-    U, S, Vt = np.linalg.svd(H)
-    U[:, :, 2] *= np.where(np.linalg.det(U @ Vt) < 0.0, -1.0, 1.0)[:, None]
-    G = U @ Vt
-    G[~(S[:, 1] > 1e-12 * S[:, 0])] = np.eye(3)
+    H = patch_covariances(patches, x_ref, x)
+    G = np.empty_like(H)
+    kernels.nearest_rotations_into(H, G)
     return G

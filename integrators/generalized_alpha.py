@@ -74,9 +74,11 @@ restart, which starts on a fresh matrix, follows the uninterrupted run to the it
 The translational DoFs are components in fixed directions, so a tumbling body's stiffness turns with it,
 and the parallel-transported frames drift about their directors relative to the body: K -> P K P^T.
 With ``rotate_matrix`` an old factorization is applied through P from the configuration where it was made
-(``dyn.transfer``: a Kabsch fit of the positions and the frames' drilling drift; exact for rigid motion of
-a free body, tests/shell/test_inertia.py), which keeps it useful over arbitrarily large rotations: the
-tumbling plate of the tests runs 600 steps on one factorization.
+(``dyn.transfer``: for the shell, node by node the rotation of the node's patch, a Kabsch fit, and the
+frames' drilling drift; exact for rigid motion of a free body, tests/shell/test_inertia.py), which keeps it
+useful over arbitrarily large rotations, the tumbling plate of the tests runs 600 steps on one
+factorization, and as a thin membrane swings, the surface turning differently from place to place (the
+kicked hub annulus: 0.12 -> 0.01 factorizations per step).
 
 Adaptive time steps (``AlphaSettings.adaptive``). Local error estimate: with the second-order condition
 gamma = 1/2 + alpha_f - alpha_m the pseudo-acceleration approximates vdot at a shifted time,
@@ -102,7 +104,8 @@ the controller would allow ``GROWTH_MARGIN`` (1.25) times more, i.e. err <= (saf
 has about 8 times the error, and without the margin it lands exactly on err = safety^3, where the next step
 is halved again. Each such round trip costs a factorization on each rung (its kept matrix went stale in the
 meantime): on the 10 m sail under its rim pulse (one revolution, tolerance 1e-5) the margin took the rung
-changes from 79 to 11 and the factorizations from 172 to 119, with 470 steps instead of 486. (The same idea
+changes from 79 to 11 and the factorizations from 172 to 119, with 470 steps instead of 486 (the kept matrix
+then carried by the body's rotation only). (The same idea
 as keeping h for a small change to save the LU decomposition, Hairer & Wanner, "Solving Ordinary
 Differential Equations II", IV.8.)
 
@@ -187,7 +190,7 @@ class AlphaSettings:
     refresh_ratio: float = 0.3    # refresh the iteration matrix when the contraction ratio exceeds this
     # the error estimate eta ||Dx|| takes theta_k >= this (module docstring, "Contraction floor"; 0: off)
     contraction_floor: float = 0.0
-    rotate_matrix: bool = True    # carry an old matrix along the body's rigid rotation (see above)
+    rotate_matrix: bool = True    # carry an old matrix along the motion (dyn.transfer, see above)
     # an iterate is also accepted when its error is below this fraction of the step's local error estimate,
     # component by component (module docstring, "Iteration error against the local error"; 0: the tolerances only)
     local_error_fraction: float = 0.3

@@ -12,10 +12,13 @@ from flexbody.mesh import generators
 def test_patches_are_the_nodes_sharing_an_element():
     mesh = generators.strip(1.0, 0.5, 2, 1)
     patches = node_patches(mesh.elements, mesh.n_nodes)
-    for node in range(mesh.n_nodes):
-        around = np.unique(mesh.elements[np.any(mesh.elements == node, axis=1)])
-        assert sorted(patches.neighbours[patches.nodes == node]) == sorted(set(around) - {node})
-    assert np.array_equal(np.asarray(patches.gather.sum(axis=1)).ravel(), np.bincount(patches.nodes))
+    D, gather = patches.edges.toarray(), patches.gather.toarray()
+    assert np.array_equal(D.sum(axis=1), np.zeros(len(D))) and np.all(np.sort(D, axis=1)[:, [0, -1]] == [-1, 1])
+    node, neighbour = np.argmin(D, axis=1), np.argmax(D, axis=1)          # x_neighbour - x_node per edge
+    assert np.array_equal(gather, (node[None, :] == np.arange(mesh.n_nodes)[:, None]).astype(float))
+    for i in range(mesh.n_nodes):
+        around = np.unique(mesh.elements[np.any(mesh.elements == i, axis=1)])
+        assert sorted(neighbour[node == i]) == sorted(set(around) - {i})
 
 
 @pytest.mark.parametrize("offset", [0.0, 1e6])

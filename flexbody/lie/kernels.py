@@ -35,6 +35,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from flexbody import _numba
 from flexbody.kernel_arrays import kernel_input, kernel_output
 from flexbody.lie.so3 import SERIES, SERIES_SWITCH
@@ -583,6 +585,124 @@ def se3_tangent_inv_into(h, out):
         for j in range(3):
             out[3 + i, 3 + j] = out[i, j]
             out[3 + i, j] = 0.0
+
+
+@jit
+def _minor3(A, r, c):
+    """The determinant of the 4 x 4 matrix A without row r and column c."""
+    i0, i1, i2 = (1, 2, 3) if r == 0 else ((0, 2, 3) if r == 1 else ((0, 1, 3) if r == 2 else (0, 1, 2)))
+    j0, j1, j2 = (1, 2, 3) if c == 0 else ((0, 2, 3) if c == 1 else ((0, 1, 3) if c == 2 else (0, 1, 2)))
+    return (A[i0, j0] * (A[i1, j1] * A[i2, j2] - A[i1, j2] * A[i2, j1])
+            - A[i0, j1] * (A[i1, j0] * A[i2, j2] - A[i1, j2] * A[i2, j0])
+            + A[i0, j2] * (A[i1, j0] * A[i2, j1] - A[i1, j1] * A[i2, j0]))
+
+
+@jit
+def nearest_rotation_into(H, N, out):
+    """out = the rotation G maximizing tr(G^T H) (H = sum_k b_k a_k^T: the best map of the a_k onto the b_k), by
+    Horn's quaternion: G = R(q), q the unit eigenvector of the largest eigenvalue of the symmetric traceless
+    4 x 4 matrix N(H) (Horn 1987, "Closed-form solution of absolute orientation using unit quaternions",
+    J. Opt. Soc. Am. A 4). The eigenvalue by Newton's method on the characteristic polynomial
+    l^4 - tr(N^2)/2 l^2 - tr(N^3)/3 l + det N from above (Theobald 2005, "Rapid calculation of RMSDs using a
+    quaternion-based characteristic polynomial", Acta Cryst. A 61; the start is the Frobenius bound
+    sqrt(tr(N^2)) >= l_max), the eigenvector as the largest column of adj(N - l I). N is scratch (4, 4). The
+    identity when H spans no plane (the second singular value below 1e-12 of the largest): the same result as
+    :func:`flexbody.lie.so3.nearest_rotations` (tested). Returns False if the eigenvector is not determined
+    (the identity is written)."""
+    # N, the symmetric matrix of the quaternion form q^T N q = tr(R(q)^T H) (Horn's, for H^T)
+    sxx, sxy, sxz = H[0, 0], H[1, 0], H[2, 0]
+    syx, syy, syz = H[0, 1], H[1, 1], H[2, 1]
+    szx, szy, szz = H[0, 2], H[1, 2], H[2, 2]
+    N[0, 0], N[0, 1], N[0, 2], N[0, 3] = sxx + syy + szz, syz - szy, szx - sxz, sxy - syx
+    N[1, 1], N[1, 2], N[1, 3] = sxx - syy - szz, sxy + syx, szx + sxz
+    N[2, 2], N[2, 3] = -sxx + syy - szz, syz + szy
+    N[3, 3] = -sxx - syy + szz
+    for i in range(4):
+        for j in range(i):
+            N[i, j] = N[j, i]
+    n2 = 0.0
+    for i in range(4):
+        for j in range(4):
+            n2 += N[i, j] * N[i, j]
+    n3 = 0.0
+    for i in range(4):
+        for j in range(4):
+            nij = 0.0
+            for k in range(4):
+                nij += N[i, k] * N[k, j]
+            n3 += nij * N[j, i]
+    det = 0.0
+    for c in range(4):
+        det += (1.0 if c % 2 == 0 else -1.0) * N[0, c] * _minor3(N, 0, c)
+    c2, c1, c0 = -0.5 * n2, -n3 / 3.0, det
+    lam = math.sqrt(n2)
+    for _ in range(100):
+        p = ((lam * lam + c2) * lam + c1) * lam + c0
+        dp = (4.0 * lam * lam + 2.0 * c2) * lam + c1
+        if dp <= 0.0:
+            break
+        step = p / dp
+        lam -= step
+        if step <= 1e-15 * lam:                      # converged (or below the root by round-off)
+            break
+    for i in range(4):
+        N[i, i] -= lam
+    best, col = -1.0, 0
+    for c in range(4):                               # the column of adj(N - l I) of largest norm
+        size = 0.0
+        for r in range(4):
+            m = _minor3(N, c, r)
+            size += m * m
+        if size > best:
+            best, col = size, c
+    q0, q1 = _minor3(N, col, 0), -_minor3(N, col, 1)
+    q2, q3 = _minor3(N, col, 2), -_minor3(N, col, 3)
+    if col % 2 == 1:
+        q0, q1, q2, q3 = -q0, -q1, -q2, -q3
+    size = math.sqrt(best)
+    scale = 0.0
+    for i in range(3):
+        for j in range(3):
+            scale = max(scale, abs(H[i, j]))
+    if not size > 1e-300 or not scale > 0.0 or not _plane_spanned(H):
+        for i in range(3):
+            for j in range(3):
+                out[i, j] = 1.0 if i == j else 0.0
+        return scale == 0.0 or not _plane_spanned(H)
+    w, x, y, z = q0 / size, q1 / size, q2 / size, q3 / size
+    out[0, 0], out[0, 1], out[0, 2] = 1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)
+    out[1, 0], out[1, 1], out[1, 2] = 2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)
+    out[2, 0], out[2, 1], out[2, 2] = 2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)
+    return True
+
+
+@jit
+def _plane_spanned(H):
+    """Whether H has a second singular value above 1e-12 of its largest: the largest cross product of two of
+    its columns against the square of its largest column (|h_i x h_j| = s1 s2 ... for the pair that spans)."""
+    big, cross = 0.0, 0.0
+    for i in range(3):
+        big = max(big, H[0, i] * H[0, i] + H[1, i] * H[1, i] + H[2, i] * H[2, i])
+        a, b = H[:, i], H[:, (i + 1) % 3]
+        cx, cy, cz = a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
+        cross = max(cross, cx * cx + cy * cy + cz * cz)
+    return cross > 1e-24 * big * big
+
+
+@jit
+def _nearest_rotations_into(H, N, out):
+    failed = 0
+    for i in range(H.shape[0]):
+        if not nearest_rotation_into(H[i], N, out[i]):
+            failed += 1
+    return failed
+
+
+def nearest_rotations_into(H, out) -> int:
+    """out[i] = :func:`nearest_rotation_into` of H[i] for every i (H (n, 3, 3), out (n, 3, 3) writeable float64,
+    checked first); returns the number of matrices whose eigenvector was not determined (given the identity)."""
+    H = kernel_input(H, (3, 3), "H")
+    return _nearest_rotations_into(H, np.empty((4, 4)), kernel_output(out, (len(H), 3, 3), "out"))
 
 
 @jit

@@ -320,6 +320,18 @@ def director(R: np.ndarray) -> np.ndarray:
     return R[:, 2].copy()
 
 
+def nearest_rotations(H: np.ndarray) -> np.ndarray:
+    """The rotations G (..., 3, 3) that maximize tr(G^T H) for H (..., 3, 3): with H = sum_k b_k a_k^T, the one
+    that best maps the vectors a_k onto b_k (least squares; Kabsch: H = U S V^T, G = U diag(1, 1, det(U V^T))
+    V^T). A rank of H below 2 (no plane spanned) gives the identity. The reference of
+    :func:`flexbody.lie.kernels.nearest_rotations_into`."""
+    U, S, Vt = np.linalg.svd(np.asarray(H, dtype=float))
+    U[..., :, 2] *= np.where(np.linalg.det(U @ Vt) < 0.0, -1.0, 1.0)[..., None]
+    G = U @ Vt
+    G[~(S[..., 1] > 1e-12 * S[..., 0])] = np.eye(3)
+    return G
+
+
 # ----------------------------------------------------------------------------------------------------------
 # The maps for many rotation vectors / matrices at once (numpy, same formulas as the single versions)
 # ----------------------------------------------------------------------------------------------------------

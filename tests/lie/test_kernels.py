@@ -199,3 +199,37 @@ def test_batched_frame_update_matches_the_reference():
     update_frames_into(frames, dtheta, out)
     for F, th, G in zip(frames, dtheta, out):
         np.testing.assert_allclose(G, F @ so3.exp(np.array([th[0], th[1], 0.0])), rtol=0, atol=1e-14)
+
+
+def test_nearest_rotations_agree_with_the_kabsch_reference():
+    """Horn's quaternion with the characteristic-polynomial eigenvalue against the SVD (so3.nearest_rotations):
+    at random matrices, at exact rotations of near 0, the series switch, near and at pi (where G must be the
+    rotation itself) for planar point sets (rank 2) and solid ones, with noise, and the identity when no plane
+    is spanned (rank 0 and 1)."""
+    rng = np.random.default_rng(11)
+    H = rng.normal(size=(300, 3, 3))
+    out = np.empty_like(H)
+    assert kernels.nearest_rotations_into(H, out) == 0
+    assert np.abs(out - so3.nearest_rotations(H)).max() < 1e-12
+    phi = random_vectors(rng, 40)
+    Q = so3.exp_many(phi)
+    for planar in (True, False):
+        a = rng.normal(size=(len(phi), 6, 3))
+        if planar:
+            a[:, :, 2] = 0.0
+        b = np.einsum("nij,nkj->nki", Q, a)
+        for noise in (0.0, 1e-3):
+            H = np.einsum("nki,nkj->nij", b + noise * rng.normal(size=b.shape), a)
+            out = np.empty_like(H)
+            assert kernels.nearest_rotations_into(H, out) == 0
+            reference = so3.nearest_rotations(H)
+            assert np.abs(out - reference).max() < 1e-12, np.abs(out - reference).max()
+            if noise == 0.0:
+                assert np.abs(out - Q).max() < 1e-12
+    degenerate = np.zeros((3, 3, 3))
+    degenerate[1] = np.outer([1.0, 2.0, 0.0], [0.0, 1.0, 1.0])          # rank 1
+    degenerate[2, 0, 0], degenerate[2, 1, 1] = 1.0, 1e-14                # rank 2 only to round-off
+    out = np.empty_like(degenerate)
+    kernels.nearest_rotations_into(degenerate, out)
+    assert np.array_equal(out, np.broadcast_to(np.eye(3), (3, 3, 3)))
+    assert np.array_equal(so3.nearest_rotations(degenerate), out)
