@@ -517,8 +517,8 @@ class DynamicModel:
         the nodes with both rotations free (k, 2, 2).
         """
         G = patch_rotations(self._patches, state_ref.x, state.x)
-        nodes = self._rot_nodes
-        D = np.einsum("nji,nkj,nkl->nil", state_ref.frames[nodes], G[nodes], state.frames[nodes])  # R_ref^T G^T R
+        nodes = self._rot_nodes                                                       # D = R_ref^T G^T R
+        D = np.swapaxes(state_ref.frames[nodes], 1, 2) @ np.swapaxes(G[nodes], 1, 2) @ state.frames[nodes]
         D2 = D[:, :2, :2]
         # project each block on a plane rotation (the drilling part; O(eps^2) in-plane leakage is dropped)
         c = 0.5 * (D2[:, 0, 0] + D2[:, 1, 1])
