@@ -50,14 +50,14 @@ components that the matrix resolves almost exactly (measured on the kicked hub a
 corrections 1e7, 1e5, 1e4, ... or, from a closer predictor, 1e6, 1e3 tolerance units), while the rest contracts
 at 0.3-0.4 per iteration; the first ratio (1e-3) then accepts an iterate whose remaining error is hundreds of
 tolerance units, and the converged answer depends on the predictor. With a floor theta_e = max(theta_k, floor)
-the estimate assumes no better contraction than the floor for what is left; the refresh ratio is the natural
-value (a kept matrix may contract that slowly before it is refreshed). Measured (docs/dynamics.md, "Spinning
-membranes at real scale"): with 0.3 the swinging strip's energy drift is the same to 0.3 % with either predictor
-there, at 1.6x the iterations per step of no floor. The default 0.1 (an iterate is accepted when its correction
-is at most 9 tolerance units): once the kept matrix followed each node's patch (``dyn.transfer``), it resolved
-the stiff part so well that the first ratio fell to 1e-2 and below, and without a floor the swinging strip's
-energy drift grew from 2.9e-6 to 1.4e-5 at 2.0 iterations per step; with 0.1 it is 2.8e-6 at 2.47 (0.3: the
-same drift at 2.5), and on the kicked hub annulus 2.08 instead of 2.05 iterations per step.
+the estimate assumes no better contraction than the floor for what is left. The default 0.1 accepts an iterate
+whose correction is at most 9 tolerance units. Measured: once the kept matrix followed each node's patch
+(``dyn.transfer``), it resolved the stiff part so well that the first ratio fell to 1e-2 and below, and without
+a floor the swinging strip's energy drift grew from 2.9e-6 to 1.4e-5 at 2.0 iterations per step; with 0.1 it is
+2.8e-6 at 2.47 iterations per step, with 0.3 (the refresh ratio: a kept matrix may contract that slowly before it
+is refreshed) the same drift at 2.5; the kicked hub annulus takes 2.08 instead of 2.05 iterations per step
+(docs/dynamics.md, "The kept matrix follows the surface"; earlier, before that transfer, 0.3 cost 1.6x the
+iterations of no floor, "Spinning membranes at real scale").
 
 Iteration error against the local error (``local_error_fraction`` kappa, default 0.3; 0: off). The tolerances
 above ask the same of every step; but an iteration error far below the step's own discretization error buys
@@ -109,9 +109,8 @@ has about 8 times the error, and without the margin it lands exactly on err = sa
 is halved again. Each such round trip costs a factorization on each rung (its kept matrix went stale in the
 meantime): on the 10 m sail under its rim pulse (one revolution, tolerance 1e-5) the margin took the rung
 changes from 79 to 11 and the factorizations from 172 to 119, with 470 steps instead of 486 (the kept matrix
-then carried by the body's rotation only). (The same idea
-as keeping h for a small change to save the LU decomposition, Hairer & Wanner, "Solving Ordinary
-Differential Equations II", IV.8.)
+then carried by the body's rotation only). The same idea as keeping h for a small change to save the LU
+decomposition (Hairer & Wanner, "Solving Ordinary Differential Equations II", IV.8).
 
 Step sizes lie on the dyadic ladder H / 2^j (H the given step, j of either sign); a step h_j starts only at a
 multiple of h_j after t_start and ends at or before the next output time (``record_every`` H): the steps land

@@ -606,9 +606,16 @@ def nearest_rotation_into(H, N, out):
     l^4 - tr(N^2)/2 l^2 - tr(N^3)/3 l + det N from above (Theobald 2005, "Rapid calculation of RMSDs using a
     quaternion-based characteristic polynomial", Acta Cryst. A 61; the start is the Frobenius bound
     sqrt(tr(N^2)) >= l_max), the eigenvector as the largest column of adj(N - l I). N is scratch (4, 4). The
-    identity when H spans no plane (the second singular value below 1e-12 of the largest): the same result as
-    :func:`flexbody.lie.so3.nearest_rotations` (tested). Returns False if the eigenvector is not determined
-    (the identity is written)."""
+    identity when H spans no plane (the second singular value below about 1e-12 of the largest,
+    :func:`_plane_spanned`): the same result as :func:`flexbody.lie.so3.nearest_rotations` (tested). Returns
+    False, with the identity written, if H is not finite or the eigenvector is not determined."""
+    finite = True
+    for i in range(3):
+        for j in range(3):
+            finite = finite and math.isfinite(H[i, j])
+    if not finite or not _plane_spanned(H):
+        _set_identity(1.0, out)
+        return finite
     # N, the symmetric matrix of the quaternion form q^T N q = tr(R(q)^T H) (Horn's, for H^T)
     sxx, sxy, sxz = H[0, 0], H[1, 0], H[2, 0]
     syx, syy, syz = H[0, 1], H[1, 1], H[2, 1]
@@ -647,7 +654,7 @@ def nearest_rotation_into(H, N, out):
             break
     for i in range(4):
         N[i, i] -= lam
-    best, col = -1.0, 0
+    best, col = 0.0, 0
     for c in range(4):                               # the column of adj(N - l I) of largest norm
         size = 0.0
         for r in range(4):
@@ -660,15 +667,9 @@ def nearest_rotation_into(H, N, out):
     if col % 2 == 1:
         q0, q1, q2, q3 = -q0, -q1, -q2, -q3
     size = math.sqrt(best)
-    scale = 0.0
-    for i in range(3):
-        for j in range(3):
-            scale = max(scale, abs(H[i, j]))
-    if not size > 1e-300 or not scale > 0.0 or not _plane_spanned(H):
-        for i in range(3):
-            for j in range(3):
-                out[i, j] = 1.0 if i == j else 0.0
-        return scale == 0.0 or not _plane_spanned(H)
+    if not (size > 1e-300 and math.isfinite(size)):
+        _set_identity(1.0, out)
+        return False
     w, x, y, z = q0 / size, q1 / size, q2 / size, q3 / size
     out[0, 0], out[0, 1], out[0, 2] = 1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)
     out[1, 0], out[1, 1], out[1, 2] = 2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)

@@ -233,3 +233,9 @@ def test_nearest_rotations_agree_with_the_kabsch_reference():
     kernels.nearest_rotations_into(degenerate, out)
     assert np.array_equal(out, np.broadcast_to(np.eye(3), (3, 3, 3)))
     assert np.array_equal(so3.nearest_rotations(degenerate), out)
+    bad = np.array([np.eye(3), np.full((3, 3), np.nan), np.diag([1.0, np.inf, 1.0])])   # not finite: identity
+    out = np.empty_like(bad)
+    assert kernels.nearest_rotations_into(bad, out) == 2
+    assert np.array_equal(out, np.broadcast_to(np.eye(3), (3, 3, 3)))
+    with pytest.raises(ValueError, match="H"):
+        kernels.nearest_rotations_into(np.eye(3), np.empty((1, 3, 3)))
