@@ -150,6 +150,13 @@ class EnergyAccount:
         self._f_damp: np.ndarray | None = None     # f_d at the last accepted step
         self._handed = -1                          # the index of the last step given to on_record
 
+    @property
+    def every_step(self) -> bool:
+        """Whether the account needs every accepted step: only to sum the work of a damping force. An undamped
+        body's account needs the start, the output steps and the last accepted step of a stopped run
+        (:class:`flexbody.turning_frame.InertialObservers` then maps only these to the inertial frame)."""
+        return getattr(self.dyn, "damping", True) is not None      # unknown: every step
+
     def __call__(self, step: AcceptedStep) -> None:
         """Account for an accepted step (the start first): D, and at an output step the record."""
         f_new = self.dyn.damping_force(step.state, step.velocity)

@@ -32,7 +32,7 @@ loads and gravity along the spin axis. Prescribed motions must be the hub turnin
 rest in it).
 
 Outputs: the states, velocities and accelerations handed to the run's observers are the inertial ones
-(:meth:`TurningFrameModel.to_inertial`), so energies, momenta, files and outputs mean what they mean in an
+(:meth:`TurningFrameModel.inertial_motion`, :class:`InertialObservers`), so energies, momenta, files and outputs mean what they mean in an
 inertial run.
 """
 
@@ -324,14 +324,45 @@ class TurningFrameModel:
 
 @dataclass
 class InertialObservers:
-    """Hands every accepted step of a turning-frame run to ``observers`` in the inertial frame (state,
-    velocities, accelerations; the pseudo-acceleration is mapped as an acceleration)."""
+    """Hands the accepted steps of a turning-frame run to ``observers`` in the inertial frame (state, velocities,
+    accelerations; the pseudo-acceleration is mapped as an acceleration).
+
+    Mapping a step costs about as much as a residual evaluation. An observer that needs only the start, the
+    output steps and the last step of a stopped run says so with ``every_step = False``
+    (:attr:`flexbody.energy.EnergyAccount.every_step`: an undamped body dissipates nothing between outputs);
+    the steps between are then mapped only for the observers that want every step (without an attribute: every
+    step). :meth:`flush` hands the last accepted step to those that skipped it (a stopped run's last converged
+    step), so that each observer sees the run's last accepted step.
+    """
 
     model: TurningFrameModel
     observers: tuple
-    _last: tuple = (None, None)      # (the last step's relative velocity, its inertial map)
+    _last: tuple = (None, None)      # (the last mapped step's relative velocity, its inertial map)
+    _pending: object = None          # the last accepted step not handed to the observers that skip steps
 
     def __call__(self, step) -> None:
+        if step.initial or step.output:
+            targets, self._pending = self.observers, None
+        else:
+            targets = tuple(o for o in self.observers if getattr(o, "every_step", True))
+            self._pending = step if len(targets) < len(self.observers) else None
+        if targets:
+            mapped = self._mapped(step)
+            for observer in targets:
+                observer(mapped)
+
+    def flush(self) -> None:
+        """Hand the last accepted step to the observers that skipped it (nothing if they have seen it)."""
+        step, self._pending = self._pending, None
+        if step is None:
+            return
+        mapped = self._mapped(step)
+        for observer in self.observers:
+            if not getattr(observer, "every_step", True):
+                observer(mapped)
+
+    def _mapped(self, step):
+        """The accepted step with its motion in the inertial frame at its time."""
         m, t = self.model, step.time
         state, v, (vdot, a) = m.inertial_motion(step.state, step.velocity,
                                                 (step.acceleration, step.pseudo_acceleration), t)
@@ -342,10 +373,8 @@ class InertialObservers:
         else:                                               # mapped at q_{n+1} (only damping work uses it)
             v_prev = m.inertial_motion(step.state, step.previous_velocity, (), t)[1]
         self._last = (step.velocity, v)
-        mapped = replace(step, state=state, velocity=v, acceleration=vdot, pseudo_acceleration=a,
-                         previous_velocity=v_prev)
-        for observer in self.observers:
-            observer(mapped)
+        return replace(step, state=state, velocity=v, acceleration=vdot, pseudo_acceleration=a,
+                       previous_velocity=v_prev)
 
 
 FRAMES = ("inertial", "turning")

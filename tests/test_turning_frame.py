@@ -248,3 +248,61 @@ def test_gauge_free_body_runs_in_the_turning_frame_and_conserves_energy():
         drift[frame] = np.ptp(E) / E.max()
     assert drift["turning"] < 1e-6
     assert drift["turning"] < 0.1 * drift["inertial"]
+
+
+class _Stop:
+    """An observer that wants every step and raises KeyboardInterrupt (Ctrl-C) when it sees step ``at``."""
+
+    def __init__(self, at: int):
+        self.at, self.seen = at, []
+
+    def __call__(self, step):
+        self.seen.append(step)
+        if step.index == self.at:
+            raise KeyboardInterrupt
+
+
+@pytest.mark.parametrize("damped", [False, True])
+def test_steps_between_outputs_are_mapped_only_for_observers_that_want_them(damped):
+    """An undamped body's energy account sees the start, the output steps and, after a stop, the last accepted
+    step; an observer without ``every_step`` and a damped body's account see every step. Each sees the same
+    inertial motion of a step."""
+    from flexbody.dynamics import RayleighDamping
+    from flexbody.energy import EnergyAccount
+    from flexbody.turning_frame import InertialObservers
+    from integrators.generalized_alpha import generalized_alpha
+
+    dyn = spinning_annulus(n_circ=8)
+    if damped:
+        dyn = DynamicModel(dyn.model, prescribed=dyn.prescribed, damping=RayleighDamping(0.0, 1e-4))
+    spin = steady_spin(dyn, OMEGA, np.zeros(3))
+    tm = turning_frame_model(dyn, "turning", spin, (0.0,))
+    seen, handed = [], []
+
+    class Account(EnergyAccount):
+        def __call__(self, step):
+            seen.append(step)
+            super().__call__(step)
+
+    account = Account(dyn, lambda rec, q, v: handed.append((rec, v)))
+    assert account.every_step is damped
+    stop = _Stop(at=7)
+    observers = InertialObservers(tm, (account, stop))
+    v0 = tm.relative_velocity(spin.state, spin.velocity + 0.01 * np.random.default_rng(3).normal(size=dyn.n_dof))
+    with pytest.raises(KeyboardInterrupt):
+        generalized_alpha(tm, 12 * PERIOD / 50, PERIOD / 50, state=spin.state, velocity=v0, observers=(observers,),
+                          record_every=5)
+    assert [s.index for s in stop.seen] == list(range(8))
+    expected = list(range(8)) if damped else [0, 5]
+    assert [s.index for s in seen] == expected
+    observers.flush()                          # what the scene run does on a stop, before account.interrupted()
+    account.interrupted()
+    assert [s.index for s in seen] == (list(range(8)) if damped else [0, 5, 7])
+    assert [rec.step for rec, _ in handed] == [5, 7]
+    for a in seen:                             # the same inertial motion as handed to the every-step observer
+        b = stop.seen[a.index]
+        assert np.array_equal(a.state.x, b.state.x) and np.array_equal(a.velocity, b.velocity)
+        assert np.array_equal(a.acceleration, b.acceleration)
+    assert np.array_equal(handed[-1][1], stop.seen[7].velocity)
+    observers.flush()                          # nothing left to hand over
+    assert len(seen) == (8 if damped else 3)

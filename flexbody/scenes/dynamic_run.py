@@ -211,6 +211,8 @@ class DynamicRun:
             result = generalized_alpha(problem, a.end_time, h, state=state, velocity=v0, settings=a.alpha_settings(),
                                        observers=(observer,), record_every=a.output_every, **options)
         except KeyboardInterrupt:              # Ctrl-C / a stop request: record the last converged step, then stop
+            if isinstance(observer, InertialObservers):
+                observer.flush()               # the account has not seen the steps since the last output
             account.interrupted()
             raise
         if self.turning is not None:
