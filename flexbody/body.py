@@ -301,14 +301,20 @@ def update_state(state: ShellState, du: np.ndarray, dtheta: np.ndarray,
     du : (n, 3) translation increments (local, or global where ``global_translation``)
     dtheta : (n, 2) in-plane rotation increments
     """
-    new = state.copy()
     dx = np.einsum("nij,nj->ni", state.frames, du)
     if global_translation is not None:
         dx[global_translation] = du[global_translation]
-    new.local = state.relative_positions() + dx       # at full precision, relative to the model origin
-    new.x = new.local + new.origin
+    return moved_state(state, dx, dtheta)
+
+
+def moved_state(state: ShellState, dx: np.ndarray, dtheta: np.ndarray) -> ShellState:
+    """The state moved by global translations dx (n, 3) and turned by in-plane rotations dtheta (n, 2):
+    x_I += dx_I, R_I <- R_I exp(th1 e1 + th2 e2) (the stresses copied)."""
     dtheta = np.ascontiguousarray(dtheta, dtype=float)
-    if dtheta.shape != (len(du), 2):
-        raise ValueError(f"dtheta must have shape ({len(du)}, 2), got {dtheta.shape}")
-    kernels.update_frames_into(np.ascontiguousarray(state.frames), dtheta, new.frames)
-    return new
+    if dtheta.shape != (len(dx), 2):
+        raise ValueError(f"dtheta must have shape ({len(dx)}, 2), got {dtheta.shape}")
+    local = state.relative_positions() + dx           # at full precision, relative to the model origin
+    frames = np.empty_like(state.frames)
+    kernels.update_frames_into(np.ascontiguousarray(state.frames), dtheta, frames)
+    return ShellState(local + state.origin, frames, None if state.stress is None else state.stress.copy(), local,
+                      state.origin)

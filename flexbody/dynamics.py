@@ -44,7 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from flexbody.assembly import Model
-from flexbody.body import ShellState
+from flexbody.body import ShellState, moved_state
 from flexbody.frames import node_patches, patch_rotations
 from flexbody.shell.inertia import (NodalInertia, ShellMass, check_mass_kind, nodal_inertia, shell_mass,
                                     with_point_masses)
@@ -233,6 +233,7 @@ class DynamicModel:
         self._rot_nodes = np.flatnonzero(np.all(index[:, 3:5] >= 0, axis=1))
         self._rot_index = index[self._rot_nodes, 3:5]
         self._patches = node_patches(m.body.mesh.elements, m.body.n_nodes)
+        self._basis_nodes = np.flatnonzero(m.has_basis)
         if self.damping is not None and not isinstance(self.damping, RayleighDamping):
             raise ValueError(f"damping must be RayleighDamping or None, got {type(self.damping).__name__}")
         if self.damping is not None and self.damping.beta_stiffness > 0 and m.body.material.wrinkling:
@@ -344,8 +345,21 @@ class DynamicModel:
         return out
 
     def update(self, state: ShellState, dq: np.ndarray) -> ShellState:
-        """q o exp(dq) on R^3 x SO(3): x_I <- x_I + dx_I, R_I <- R_I exp(dtheta_1 e1 + dtheta_2 e2)."""
-        return self.model.update(state, self.model_increment(state, dq))
+        """q o exp(dq) on R^3 x SO(3): x_I <- x_I + dx_I, R_I <- R_I exp(dtheta_1 e1 + dtheta_2 e2).
+
+        dx_I: the increment's fixed-direction components, E_I dv_I on the nodes with a constraint basis (the
+        Model's update of :meth:`model_increment`, without turning the translations into the local frames and
+        back). In the mixed Newton iteration (``state.stress`` set) the Model moves the stresses on too."""
+        m = self.model
+        if state.stress is not None:
+            return m.update(state, self.model_increment(state, dq))
+        d6 = np.zeros((m.body.n_nodes, 6))
+        d6.ravel()[m.free] = dq
+        dx = d6[:, :3]
+        idx = self._basis_nodes
+        if idx.size:
+            dx[idx] = np.einsum("nij,nj->ni", m.basis[idx], dx[idx])
+        return moved_state(state, dx, d6[:, 3:5])
 
     def prescribe(self, state: ShellState, t: float) -> ShellState:
         """The state with the prescribed nodes moved to their place at time t (a no-op without any).

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from flexbody import _numba
+from flexbody.kernel_arrays import kernel_input, kernel_output
 from flexbody.lie import kernels
 
 
@@ -81,12 +83,19 @@ def align_frame(frame: np.ndarray, direction: np.ndarray, node: int) -> tuple[np
 
 @dataclass(frozen=True)
 class NodePatches:
-    """The patch of each node: the nodes it shares an element with, as the directed edges (node, neighbour)
-    of the (edges, n) difference matrix ``edges`` (x_neighbour - x_node per row) and the (n, edges) 0/1 matrix
-    ``gather`` that sums edge values per node."""
+    """The patch of each node: the nodes it shares an element with.
+
+    ``edges`` (edges, n) is the difference matrix of the directed edges (node, neighbour), x_neighbour - x_node
+    per row, and ``gather`` (n, edges) the 0/1 matrix that sums edge values per node (the numpy reference,
+    :func:`patch_covariances`); ``start`` (n + 1,) and ``neighbours`` (edges,) list the same edges node by
+    node, the neighbours of node I in ``neighbours[start[I]:start[I + 1]]`` (the compiled kernel,
+    :func:`patch_rotations`).
+    """
 
     edges: sp.csr_matrix
     gather: sp.csr_matrix
+    start: np.ndarray
+    neighbours: np.ndarray
 
 
 def node_patches(elements: np.ndarray, n_nodes: int) -> NodePatches:
@@ -94,12 +103,13 @@ def node_patches(elements: np.ndarray, n_nodes: int) -> NodePatches:
     elements = np.asarray(elements)
     k = elements.shape[1]
     pairs = np.stack([np.repeat(elements, k, axis=1).ravel(), np.tile(elements, (1, k)).ravel()], axis=1)
-    pairs = np.unique(pairs[pairs[:, 0] != pairs[:, 1]], axis=0)   # each neighbour once, however many elements
+    pairs = np.unique(pairs[pairs[:, 0] != pairs[:, 1]], axis=0)   # each neighbour once, sorted by node
     n_pairs, rows = len(pairs), np.arange(len(pairs))
     edges = sp.csr_matrix((np.r_[-np.ones(n_pairs), np.ones(n_pairs)], (np.r_[rows, rows], pairs.T.ravel())),
                           shape=(n_pairs, n_nodes))
     gather = sp.csr_matrix((np.ones(n_pairs), (pairs[:, 0], rows)), shape=(n_nodes, n_pairs))
-    return NodePatches(edges, gather)
+    start = np.searchsorted(pairs[:, 0], np.arange(n_nodes + 1)).astype(np.int64)
+    return NodePatches(edges, gather, start, np.ascontiguousarray(pairs[:, 1], dtype=np.int64))
 
 
 def patch_covariances(patches: NodePatches, x_ref: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -113,14 +123,34 @@ def patch_rotations(patches: NodePatches, x_ref: np.ndarray, x: np.ndarray) -> n
     """The rotations G_I (n, 3, 3) that best map each node's patch from ``x_ref`` onto ``x``.
 
     G_I minimizes sum_J |G (x_J,ref - x_I,ref) - (x_J - x_I)|^2 over the nodes J of the patch of I: the rotation
-    nearest to :func:`patch_covariances` H_I (Kabsch; :func:`flexbody.lie.kernels.nearest_rotations_into`,
+    nearest to :func:`patch_covariances` H_I (Kabsch; :func:`flexbody.lie.kernels.nearest_rotation_into`,
     Horn's quaternion, equal to :func:`flexbody.lie.so3.nearest_rotations` to round-off). The edges of a patch
     of a shell span its tangent plane, which fixes the rotation. Under a rigid motion every G_I is the body's
     rotation; under a smooth deformation, the rotation of the surface around the node (its tilt, and its turn
     in its plane). A patch whose edges do not span a plane (none in a mesh of non-degenerate elements) gets
     the identity.
+
+    Compiled, node by node (:func:`_patch_rotations_into`: H_I summed over the node's edges, then its rotation):
+    the same H_I as :func:`patch_covariances` but summed in another order, so G_I agrees with the numpy path
+    to round-off, not bit for bit.
     """
-    H = patch_covariances(patches, x_ref, x)
-    G = np.empty_like(H)
-    kernels.nearest_rotations_into(H, G)
+    n = len(patches.start) - 1
+    x_ref, x = kernel_input(x_ref, (3,), "x_ref", rows=n), kernel_input(x, (3,), "x", rows=n)
+    G = np.empty((n, 3, 3))
+    _patch_rotations_into(patches.start, patches.neighbours, x_ref, x, np.empty((3, 3)), np.empty((4, 4)),
+                          kernel_output(G, (n, 3, 3), "out"))
     return G
+
+
+@_numba.plain
+def _patch_rotations_into(start, neighbours, x_ref, x, H, N, out):
+    """out[I] = the rotation nearest to H_I = sum_J (x_J - x_I)(x_J,ref - x_I,ref)^T over the neighbours J of I."""
+    for i in range(len(start) - 1):
+        H[:, :] = 0.0
+        for k in range(start[i], start[i + 1]):
+            j = neighbours[k]
+            for a in range(3):
+                e = x[j, a] - x[i, a]
+                for b in range(3):
+                    H[a, b] += e * (x_ref[j, b] - x_ref[i, b])
+        kernels.nearest_rotation_into(H, N, out[i])

@@ -4,7 +4,7 @@ rotation under rigid motion, also far from the origin; the turn of the surface u
 import numpy as np
 import pytest
 
-from flexbody.frames import node_patches, patch_rotations
+from flexbody.frames import node_patches, patch_covariances, patch_rotations
 from flexbody.lie import so3
 from flexbody.mesh import generators
 
@@ -19,6 +19,21 @@ def test_patches_are_the_nodes_sharing_an_element():
     for i in range(mesh.n_nodes):
         around = np.unique(mesh.elements[np.any(mesh.elements == i, axis=1)])
         assert sorted(neighbour[node == i]) == sorted(set(around) - {i})
+        assert patches.neighbours[patches.start[i]:patches.start[i + 1]].tolist() == sorted(set(around) - {i})
+    assert patches.start[0] == 0 and patches.start[-1] == len(D)
+
+
+def test_the_compiled_patch_rotations_are_the_numpy_reference():
+    """The kernel (H_I summed node by node, then Horn's quaternion) against the sparse edge sums and the SVD
+    (flexbody.lie.so3.nearest_rotations) at random large deformations of a curved shell."""
+    rng = np.random.default_rng(4)
+    mesh = generators.cylinder(2.0, 1.5, 3, 4, angle=np.pi / 2)
+    patches = node_patches(mesh.elements, mesh.n_nodes)
+    x_ref = mesh.nodes + 0.05 * rng.normal(size=mesh.nodes.shape)
+    for scale in (1e-6, 0.05, 0.3):
+        x = (x_ref + scale * rng.normal(size=x_ref.shape)) @ so3.exp(rng.normal(size=3)).T
+        G = patch_rotations(patches, x_ref, x)
+        assert np.abs(G - so3.nearest_rotations(patch_covariances(patches, x_ref, x))).max() < 1e-12
 
 
 @pytest.mark.parametrize("offset", [0.0, 1e6])
