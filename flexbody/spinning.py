@@ -60,9 +60,10 @@ def finite_vector(value, what: str) -> np.ndarray:
 
 
 def centrifugal_forces(mass: np.ndarray, x: np.ndarray, omega: np.ndarray, center: np.ndarray) -> np.ndarray:
-    """Nodal centrifugal forces f_I = -m_I Omega x (Omega x (x_I - c)), (n, 3)."""
-    r = x - center
-    return -mass[:, None] * np.cross(omega, np.cross(omega, r))
+    """Nodal centrifugal forces f_I = -m_I Omega x (Omega x (x_I - c)) = m_I (|Omega|^2 I - Omega Omega^T)(x_I - c),
+    (n, 3)."""
+    A = float(omega @ omega) * np.eye(3) - np.outer(omega, omega)     # symmetric
+    return mass[:, None] * ((x - center) @ A)
 
 
 def director_spin_moments(rotary: np.ndarray, frames: np.ndarray, omega: np.ndarray) -> np.ndarray:
@@ -70,8 +71,10 @@ def director_spin_moments(rotary: np.ndarray, frames: np.ndarray, omega: np.ndar
 
     In global components this is j_I (t_I . Omega) (Omega x t_I) (the inertia moment of the spinning director).
     """
-    w = np.einsum("nji,j->ni", frames, omega)
-    return rotary[:, None] * w[:, 2:3] * np.stack([w[:, 1], -w[:, 0]], axis=1)
+    w = omega @ frames                                # (n, 3): w_i = sum_j Omega_j R_ji
+    out = np.empty((len(w), 2))
+    out[:, 0], out[:, 1] = w[:, 1], -w[:, 0]
+    return (rotary * w[:, 2])[:, None] * out
 
 
 def director_spin_moment_tangent(rotary: np.ndarray, frames: np.ndarray, omega: np.ndarray) -> np.ndarray:
@@ -108,6 +111,7 @@ class SpinningModel:
     load_factor_time: float = 0.0
     _index: np.ndarray = field(init=False, repr=False)
     _rows: np.ndarray = field(init=False, repr=False)       # _row_maps(), constant
+    _basis: np.ndarray = field(init=False, repr=False)      # the nodes with a translation basis
     _turning: np.ndarray = field(init=False, repr=False)    # _moving() as 0/1 masses, constant
 
     def __post_init__(self) -> None:
@@ -118,6 +122,7 @@ class SpinningModel:
         index[m.free] = np.arange(m.n_dof)
         self._index = index.reshape(-1, 6)
         self._rows = self._row_maps()
+        self._basis = np.flatnonzero(m.has_basis)
         self._turning = self._moving().astype(float)
 
     # -- the static-model contract of the integrators ------------------------------------------------------
@@ -176,8 +181,10 @@ class SpinningModel:
         """f_c on the free DoFs (the model's row layout): centrifugal forces and director moments."""
         bm = self.dynamic.body_mass
         f6 = np.zeros((self.model.body.n_nodes, 6))
-        f = bm.scalar @ centrifugal_forces(self._turning, state.x, self.omega, self.center)
-        f6[:, :3] = np.einsum("nij,nj->ni", self._rows, f)
+        f6[:, :3] = bm.scalar @ centrifugal_forces(self._turning, state.x, self.omega, self.center)
+        idx = self._basis                                # E_I^T f_I on the nodes with a translation basis
+        if idx.size:
+            f6[idx, :3] = np.einsum("nij,nj->ni", self._rows[idx], f6[idx, :3])
         f6[:, 3:5] = director_spin_moments(bm.rotary, state.frames, self.omega)
         return f6.ravel()[self.model.free]
 

@@ -93,6 +93,13 @@ class TurningFrameModel:
         T = self._translations
         self._coriolis_translations = (2.0 * (T.T @ sp.kron(S, so3.hat(frame.omega)) @ T)).tocsc()
         self._rot = np.flatnonzero(~dynamic.is_translation)
+        # the Coriolis forces on the director rotations: the partner of each rotation DoF (w_2 for w_1 and back;
+        # n_dof where it is held: a zero appended to v) and the sign of 2 j (t . Omega) (-w_2, w_1)
+        comp = dynamic.comp[self._rot]
+        index = np.full((dynamic.model.body.n_nodes, 2), dynamic.n_dof, dtype=np.int64)
+        index[dynamic.node[self._rot], comp - 3] = self._rot
+        self._partner = index[dynamic.node[self._rot], 4 - comp]
+        self._rot_sign = np.where(comp == 3, -1.0, 1.0)
 
     # -- checks --------------------------------------------------------------------------------------------
     def _along_axis(self, vector: np.ndarray) -> bool:
@@ -187,12 +194,7 @@ class TurningFrameModel:
     def coriolis_force(self, state: ShellState, v: np.ndarray) -> np.ndarray:
         """G(q) v: 2 S Omega x ydot on the translations, 2 j (t . Omega)(-w_2, w_1) on the director rotations."""
         out = self._coriolis_translations @ v
-        rot, comp = self._rot, self.dynamic.comp[self._rot]
-        c = self._director_spin(state)
-        w = np.zeros((self.dynamic.model.body.n_nodes, 2))
-        w[self.dynamic.node[rot], comp - 3] = v[rot]
-        other = w[self.dynamic.node[rot], 4 - comp]               # w_2 for comp 3, w_1 for comp 4
-        out[rot] += c * np.where(comp == 3, -other, other)
+        out[self._rot] += self._director_spin(state) * self._rot_sign * np.append(v, 0.0)[self._partner]
         return out
 
     def coriolis_matrix(self, state: ShellState) -> sp.csc_matrix:
