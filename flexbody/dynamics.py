@@ -46,6 +46,7 @@ import scipy.sparse as sp
 from flexbody.assembly import Model
 from flexbody.body import ShellState, moved_state
 from flexbody.frames import node_patches, patch_rotations
+from flexbody.matrix_transfer import apply_node_rotations, drilling_drifts
 from flexbody.shell.inertia import (NodalInertia, ShellMass, check_mass_kind, nodal_inertia, shell_mass,
                                     with_point_masses)
 
@@ -528,30 +529,17 @@ class DynamicModel:
         matrix (a lumped mass stays invariant, a consistent one to the turn between neighbours).
 
         Returns G_I (k, 3, 3) of the nodes with free fixed-direction translations and the 2 x 2 blocks D_I^T of
-        the nodes with both rotations free (k, 2, 2).
+        the nodes with both rotations free (k, 2, 2) (:func:`flexbody.matrix_transfer.drilling_drifts`).
         """
         G = patch_rotations(self._patches, state_ref.x, state.x)
-        nodes = self._rot_nodes                                                       # D = R_ref^T G^T R
-        D = np.swapaxes(state_ref.frames[nodes], 1, 2) @ np.swapaxes(G[nodes], 1, 2) @ state.frames[nodes]
-        D2 = D[:, :2, :2]
-        # project each block on a plane rotation (the drilling part; O(eps^2) in-plane leakage is dropped)
-        c = 0.5 * (D2[:, 0, 0] + D2[:, 1, 1])
-        s_ = 0.5 * (D2[:, 1, 0] - D2[:, 0, 1])
-        norm = np.hypot(c, s_)
-        c, s_ = c / norm, s_ / norm
-        DT = np.stack([np.stack([c, s_], axis=1), np.stack([-s_, c], axis=1)], axis=1)   # D^T
-        return G[self._col_nodes], DT
+        nodes = self._rot_nodes
+        return G[self._col_nodes], drilling_drifts(state_ref.frames[nodes], G[nodes], state.frames[nodes])
 
     def apply_transfer(self, vec: np.ndarray, transfer: tuple[np.ndarray, np.ndarray],
                        transpose: bool = False) -> np.ndarray:
-        """P vec (or P^T vec) for P from :meth:`transfer`."""
+        """P vec (or P^T vec) for P from :meth:`transfer` (:func:`flexbody.matrix_transfer.apply_node_rotations`)."""
         G, DT = transfer
-        out = np.array(vec, dtype=float, copy=True)
-        if transpose:
-            G, DT = np.transpose(G, (0, 2, 1)), np.transpose(DT, (0, 2, 1))
-        out[self._col_index] = np.einsum("nij,nj->ni", G, vec[self._col_index])
-        out[self._rot_index] = np.einsum("nij,nj->ni", DT, vec[self._rot_index])
-        return out
+        return apply_node_rotations(vec, self._col_index, G, self._rot_index, DT, transpose)
 
     # -- initial conditions --------------------------------------------------------------------------------
     def velocity_from_nodal(self, state: ShellState, xdot: np.ndarray, omega: np.ndarray) -> np.ndarray:
