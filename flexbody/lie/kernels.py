@@ -145,6 +145,18 @@ def coefficients(p):
 coefficients_fast = _fast_twin(coefficients, _horner=_horner_fast)
 
 
+@jit
+def exp_coefficients(p):
+    """``(a1, a2)`` at ``p = |phi|``: what exp(phi) needs of :func:`coefficients`, by the same formulas (the same
+    bits), without the seven others (a third of the cost of a nodal update)."""
+    if p < _SWITCH:
+        x = p * p
+        return _horner(_A1, x), _horner(_A2, x)
+    s = math.sin(p)
+    omc = 2.0 * math.sin(0.5 * p) ** 2  # 1 - cos p without cancellation
+    return s / p, omc / p**2
+
+
 @inline
 def point_coefficients_into(p, co):
     """co[:9] = :func:`coefficients` at ``p``, except a4 and c4 (co[3], co[6]), which are 0 below the series
@@ -419,7 +431,7 @@ def d2_tangent_co_into(phi, a, b, co, out):
 @jit
 def _rodrigues(phi):
     """Entries (row major) of exp(phi)."""
-    return rodrigues_co(phi, coefficients(_norm(phi)))
+    return rodrigues_co(phi, exp_coefficients(_norm(phi)))
 
 
 @jit

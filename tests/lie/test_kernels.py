@@ -42,6 +42,14 @@ def test_coefficients_agree_with_reference():
     assert worst < TOL
 
 
+def test_exp_coefficients_are_the_first_two_coefficients_bit_for_bit():
+    """exp(phi) takes (a1, a2) alone: the same bits as :func:`coefficients` near 0, near the series switch, near
+    pi and at random."""
+    rng = np.random.default_rng(8)
+    for p in [0.0, *sample_angles(rng, 200)]:
+        assert kernels.exp_coefficients(p) == kernels.coefficients(p)[:2], p
+
+
 def test_so3_kernels_agree_with_reference():
     rng = np.random.default_rng(1)
     out, vec = np.empty((3, 3)), np.empty(3)
