@@ -32,8 +32,8 @@ loads and gravity along the spin axis. Prescribed motions must be the hub turnin
 rest in it).
 
 Outputs: the states, velocities and accelerations handed to the run's observers are the inertial ones
-(:meth:`TurningFrameModel.inertial_motion`, :class:`InertialObservers`), so energies, momenta, files and outputs mean what they mean in an
-inertial run.
+(:meth:`TurningFrameModel.inertial_motion`, :class:`InertialObservers`), so energies, momenta, files and outputs
+mean what they mean in an inertial run.
 """
 
 from __future__ import annotations
