@@ -184,7 +184,9 @@ def _energy(weights: np.ndarray, eps: np.ndarray, section: np.ndarray, wrinkling
     relaxed energy 1/2 sum w_g eps_g^T sigma(eps_g) of the tension-field membrane."""
     if wrinkling:
         return 0.5 * float(np.einsum("eg,egi,egi->", weights, eps, section_stresses(eps, section, True)))
-    return 0.5 * float(np.einsum("eg,egi,ij,egj->", weights, eps, section, eps))
+    # C eps_g first: the four-operand einsum "eg,egi,ij,egj->" loops over every index combination (1.7 ms against
+    # 0.14 ms for 256 elements, an energy record at every output step of a dynamic run)
+    return 0.5 * float(np.einsum("eg,egi,egi->", weights, eps @ section.T, eps))
 
 
 class _AssumedStrains:
