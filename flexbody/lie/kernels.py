@@ -600,13 +600,31 @@ def se3_tangent_inv_into(h, out):
 
 
 @jit
-def _minor3(A, r, c):
-    """The determinant of the 4 x 4 matrix A without row r and column c."""
-    i0, i1, i2 = (1, 2, 3) if r == 0 else ((0, 2, 3) if r == 1 else ((0, 1, 3) if r == 2 else (0, 1, 2)))
-    j0, j1, j2 = (1, 2, 3) if c == 0 else ((0, 2, 3) if c == 1 else ((0, 1, 3) if c == 2 else (0, 1, 2)))
-    return (A[i0, j0] * (A[i1, j1] * A[i2, j2] - A[i1, j2] * A[i2, j1])
-            - A[i0, j1] * (A[i1, j0] * A[i2, j2] - A[i1, j2] * A[i2, j0])
-            + A[i0, j2] * (A[i1, j0] * A[i2, j1] - A[i1, j1] * A[i2, j0]))
+def _adjugate4(A):
+    """(det A, adj A row major as 16 numbers) of a 4 x 4 matrix A, from the six 2 x 2 minors of its first two rows
+    and the six of its last two (Laplace's expansion by complementary minors: D. Eberly, "The Laplace Expansion
+    Theorem: Computing the Determinants and Inverses of Matrices", Geometric Tools, 2008)."""
+    s0 = A[0, 0] * A[1, 1] - A[1, 0] * A[0, 1]
+    s1 = A[0, 0] * A[1, 2] - A[1, 0] * A[0, 2]
+    s2 = A[0, 0] * A[1, 3] - A[1, 0] * A[0, 3]
+    s3 = A[0, 1] * A[1, 2] - A[1, 1] * A[0, 2]
+    s4 = A[0, 1] * A[1, 3] - A[1, 1] * A[0, 3]
+    s5 = A[0, 2] * A[1, 3] - A[1, 2] * A[0, 3]
+    c5 = A[2, 2] * A[3, 3] - A[3, 2] * A[2, 3]
+    c4 = A[2, 1] * A[3, 3] - A[3, 1] * A[2, 3]
+    c3 = A[2, 1] * A[3, 2] - A[3, 1] * A[2, 2]
+    c2 = A[2, 0] * A[3, 3] - A[3, 0] * A[2, 3]
+    c1 = A[2, 0] * A[3, 2] - A[3, 0] * A[2, 2]
+    c0 = A[2, 0] * A[3, 1] - A[3, 0] * A[2, 1]
+    det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
+    return det, (A[1, 1] * c5 - A[1, 2] * c4 + A[1, 3] * c3, -A[0, 1] * c5 + A[0, 2] * c4 - A[0, 3] * c3,
+                 A[3, 1] * s5 - A[3, 2] * s4 + A[3, 3] * s3, -A[2, 1] * s5 + A[2, 2] * s4 - A[2, 3] * s3,
+                 -A[1, 0] * c5 + A[1, 2] * c2 - A[1, 3] * c1, A[0, 0] * c5 - A[0, 2] * c2 + A[0, 3] * c1,
+                 -A[3, 0] * s5 + A[3, 2] * s2 - A[3, 3] * s1, A[2, 0] * s5 - A[2, 2] * s2 + A[2, 3] * s1,
+                 A[1, 0] * c4 - A[1, 1] * c2 + A[1, 3] * c0, -A[0, 0] * c4 + A[0, 1] * c2 - A[0, 3] * c0,
+                 A[3, 0] * s4 - A[3, 1] * s2 + A[3, 3] * s0, -A[2, 0] * s4 + A[2, 1] * s2 - A[2, 3] * s0,
+                 -A[1, 0] * c3 + A[1, 1] * c1 - A[1, 2] * c0, A[0, 0] * c3 - A[0, 1] * c1 + A[0, 2] * c0,
+                 -A[3, 0] * s3 + A[3, 1] * s1 - A[3, 2] * s0, A[2, 0] * s3 - A[2, 1] * s1 + A[2, 2] * s0)
 
 
 @jit
@@ -650,10 +668,7 @@ def nearest_rotation_into(H, N, out):
             for k in range(4):
                 nij += N[i, k] * N[k, j]
             n3 += nij * N[j, i]
-    det = 0.0
-    for c in range(4):
-        det += (1.0 if c % 2 == 0 else -1.0) * N[0, c] * _minor3(N, 0, c)
-    c2, c1, c0 = -0.5 * n2, -n3 / 3.0, det
+    c2, c1, c0 = -0.5 * n2, -n3 / 3.0, _adjugate4(N)[0]
     lam = math.sqrt(n2)
     for _ in range(100):
         p = ((lam * lam + c2) * lam + c1) * lam + c0
@@ -666,18 +681,13 @@ def nearest_rotation_into(H, N, out):
             break
     for i in range(4):
         N[i, i] -= lam
+    adj = _adjugate4(N)[1]
     best, col = 0.0, 0
     for c in range(4):                               # the column of adj(N - l I) of largest norm
-        size = 0.0
-        for r in range(4):
-            m = _minor3(N, c, r)
-            size += m * m
+        size = adj[c] * adj[c] + adj[4 + c] * adj[4 + c] + adj[8 + c] * adj[8 + c] + adj[12 + c] * adj[12 + c]
         if size > best:
             best, col = size, c
-    q0, q1 = _minor3(N, col, 0), -_minor3(N, col, 1)
-    q2, q3 = _minor3(N, col, 2), -_minor3(N, col, 3)
-    if col % 2 == 1:
-        q0, q1, q2, q3 = -q0, -q1, -q2, -q3
+    q0, q1, q2, q3 = adj[col], adj[4 + col], adj[8 + col], adj[12 + col]
     size = math.sqrt(best)
     if not (size > 1e-300 and math.isfinite(size)):
         _set_identity(1.0, out)

@@ -42,6 +42,24 @@ def test_coefficients_agree_with_reference():
     assert worst < TOL
 
 
+def test_adjugate_of_a_4x4_matrix():
+    """adj A = det(A) A^-1 and det A, of the kernel that gives Horn's quaternion its eigenvector (random, symmetric
+    and singular matrices: the adjugate of a rank-3 matrix is the outer product of its null vectors)."""
+    rng = np.random.default_rng(9)
+    for _ in range(50):
+        A = rng.normal(size=(4, 4))
+        for M in (A, A + A.T):
+            det, adj = kernels._adjugate4(M)
+            assert abs(det - np.linalg.det(M)) < 1e-12 * max(1.0, abs(det))
+            assert np.allclose(np.reshape(adj, (4, 4)), np.linalg.det(M) * np.linalg.inv(M), rtol=0, atol=1e-11)
+    S = rng.normal(size=(4, 3))
+    singular = S @ np.diag([1.0, 2.0, 3.0]) @ S.T                              # symmetric, rank 3
+    adj = np.reshape(kernels._adjugate4(singular)[1], (4, 4))
+    null = np.linalg.svd(singular)[2][-1]
+    assert np.allclose(adj, (null @ adj @ null) * np.outer(null, null), rtol=0, atol=1e-10)
+    assert abs(null @ adj @ null) > 1e-3
+
+
 def test_exp_coefficients_are_the_first_two_coefficients_bit_for_bit():
     """exp(phi) takes (a1, a2) alone: the same bits as :func:`coefficients` near 0, near the series switch, near
     pi and at random."""
