@@ -28,13 +28,17 @@ from flexbody.shell.kernels.points import _GT_times, _add_strain_gradient_row
 
 @inl
 def _assumed_cov(a_ptr, a_p, a_j, a_v, Pe, cov):
-    """cov[g, i] = sum_pj A[g, i, p, j] Pe[p, j] (A by rows: a_ptr over g * 8 + i)."""
+    """cov[g, i] = sum_pj A[g, i, p, j] Pe[p, j] (A by rows: a_ptr over g * 8 + i).
+
+    The stored indices are read as unsigned (:data:`flexbody._numba.uint`): numba then drops the wraparound
+    test of a negative index at every nonzero (this gather and :func:`_pull_back` took twice as long).
+    """
     for gg in range(N_GAUSS):
         for i in range(8):
             r = 8 * gg + i
             acc = 0.0
-            for q in range(a_ptr[r], a_ptr[r + 1]):
-                acc += a_v[q] * Pe[a_p[q], a_j[q]]
+            for q in range(_u(a_ptr[r]), _u(a_ptr[r + 1])):
+                acc += a_v[q] * Pe[_u(a_p[q]), _u(a_j[q])]
             cov[gg, i] = acc
 
 
@@ -95,14 +99,15 @@ def _stress_weights(e, used, to_cart, weights, C, Ch, use_ch, a_ptr, a_p, a_j, a
 
 @inl
 def _pull_back(used, at_ptr, at_g, at_i, at_v, st, Ps):
-    """Ps[p, j] = sum_g,i A[g, i, p, j] st[g, i] at the used points (A by columns: at_ptr over p * 8 + j)."""
+    """Ps[p, j] = sum_g,i A[g, i, p, j] st[g, i] at the used points (A by columns: at_ptr over p * 8 + j;
+    unsigned indices as in :func:`_assumed_cov`)."""
     for k in range(used.shape[0]):
         p = used[k]
         for j in range(8):
             c = 8 * p + j
             acc = 0.0
-            for q in range(at_ptr[c], at_ptr[c + 1]):
-                acc += at_v[q] * st[at_g[q], at_i[q]]
+            for q in range(_u(at_ptr[c]), _u(at_ptr[c + 1])):
+                acc += at_v[q] * st[_u(at_g[q]), _u(at_i[q])]
             Ps[p, j] = acc
 
 
