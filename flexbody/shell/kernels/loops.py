@@ -46,9 +46,9 @@ from flexbody.shell.kernels.geometric import _points_tangent
 from flexbody.shell.kernels.layout import NDOF, NZ, N_EVAL
 from flexbody.shell.kernels.material import (_gauss_strains, _given_stress_weights, _nonlocal_material,
                                              _relaxed_stress_weights, _section_cov, _stress_weights)
-from flexbody.shell.kernels.points import (_force_points, _interpolate_points, _kinematics_points, _load_element,
-                                           _node_setup, _point_coefficients, _strain_increments_points,
-                                           _strains_points)
+from flexbody.shell.kernels.points import (_force_kinematics_points, _force_points, _interpolate_points,
+                                           _kinematics_points, _load_element, _node_setup, _point_coefficients,
+                                           _strain_increments_points, _strains_points)
 from flexbody.shell.kernels.primitives import _prefetch_element
 from flexbody.shell.maps import CompressedMaps, SectionStiffness, checked_section, compress_maps
 
@@ -90,21 +90,24 @@ def _chunk(e0, e1, x_el, fr_el, e_ref, to_cart, weights, C, cblk,
         _node_setup(fr, dn, Ti, ninv, t0)
         _interpolate_points(used, dn, Pd, Pda)
         _point_coefficients(used, Pd, Pco)
-        _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX)
+        if want_tangent:
+            _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX)
+        else:
+            _force_kinematics_points(used, at_ptr, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX)
         _strains_points(e, used, e_ref, PF, Pe)
         if Ct is not None:
-            _relaxed_stress_weights(e, used, to_cart, weights, C, want_tangent, a_ptr, a_p, a_j, a_v,
-                                    at_ptr, at_g, at_i, at_v, Pe, cov, st, v16, Ct, CT, Ch, Ps)
+            _relaxed_stress_weights(e, used, to_cart, weights, C, want_tangent, a_ptr, a_p, a_j, a_v, Pe, cov, st,
+                                    v16, Ct, CT, Ch, Ps)
         else:
             if want_tangent:
                 _section_cov(e, to_cart, weights, C, cblk, CT, Ch)
-            _stress_weights(e, used, to_cart, weights, C, Ch, want_tangent, a_ptr, a_p, a_j, a_v, at_ptr, at_g,
-                            at_i, at_v, Pe, cov, st, v16, Ps)
+            _stress_weights(e, used, to_cart, weights, C, Ch, want_tangent, a_ptr, a_p, a_j, a_v, Pe, cov, st, v16,
+                            Ps)
         _force_points(used, PF, PQ, PT, PR, PX, Ps, g, G2, phi, fz)
         _force_to_local(e, fz, fr, Ti, f)
         fv = f
         if use_stress:
-            _given_stress_weights(e, used, to_cart, weights, stress, at_ptr, at_g, at_i, at_v, st, Ps)
+            _given_stress_weights(e, used, to_cart, weights, stress, a_ptr, a_p, a_j, a_v, st, Ps)
             _force_points(used, PF, PQ, PT, PR, PX, Ps, g, G2, phi, fz)
             _force_to_local(e, fz, fr, Ti, fg)
             fv = fg
