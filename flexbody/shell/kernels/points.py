@@ -122,29 +122,19 @@ def _bending_kinematics(p, Pd, Pda, Pco, PT, PF, PX):
 
 
 @jit
-def _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX):
+def _kinematics_points(used, at_ptr, all_points, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX):
     """Q = exp(d), T(d), R = R_0 Q, F = [f_ru, f_su, f_rw, f_sw], X_a = DT(d)[.] d_,a at the used points.
 
-    (X is computed also where only the strains are wanted: one compiled version serves every caller.)
+    With all_points False, f_aw and X_a only at the points whose bending strains some assumed strain reads
+    (columns 8 p + 3 .. 8 p + 5 of A, by at_ptr: the Gauss points of MITC6), zero elsewhere: enough for the
+    force and the assumed strains, which read them only through these bending strains and their weights (the
+    other points' bending weights Ps[p, 3:6] are zero). The tangent and the strain increments take all points.
+    (A run-time flag: one compiled version serves every caller; a literal would compile a second one.)
     """
     for k in range(used.shape[0]):
         p = _u(used[k])
         _frame_kinematics(p, x, fr, Pd, Pco, PQ, PT, PR, PF)
-        _bending_kinematics(p, Pd, Pda, Pco, PT, PF, PX)
-
-
-@jit
-def _force_kinematics_points(used, at_ptr, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX):
-    """:func:`_kinematics_points` for the force alone: f_aw and X_a only at the points whose bending strains
-    some assumed strain reads (columns 8 p + 3 .. 8 p + 5 of A: the Gauss points of MITC6), zero elsewhere.
-
-    Where they are zero the point's bending weights Ps[p, 3:6] are zero too (no row of A reads them), so the
-    force gets the same terms: f_aw and X enter it only through products with these weights.
-    """
-    for k in range(used.shape[0]):
-        p = _u(used[k])
-        _frame_kinematics(p, x, fr, Pd, Pco, PQ, PT, PR, PF)
-        if at_ptr[8 * p + 6] > at_ptr[8 * p + 3]:
+        if all_points or at_ptr[8 * p + 6] > at_ptr[8 * p + 3]:
             _bending_kinematics(p, Pd, Pda, Pco, PT, PF, PX)
             continue
         for a in range(2):
