@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from flexbody._numba import fast as jit, inline as inl
+from flexbody._numba import fast as jit, inline as inl, uint as _u
 from flexbody.lie import kernels as lk
 from flexbody.shell.kernels.expansion import _expand_vec
 from flexbody.shell.kernels.layout import NZ, _EDN, _EN
@@ -25,7 +25,7 @@ from flexbody.shell.kernels.layout import NZ, _EDN, _EN
 def _point_coefficients(used, Pd, Pco):
     """Pco[p] = (a1, a2, a3, a4, c2, c3, c4, e2, e3) at |d_p| for the used points (a4, c4 unused)."""
     for k in range(used.shape[0]):
-        p = used[k]
+        p = _u(used[k])
         n = math.sqrt(Pd[p, 0] * Pd[p, 0] + Pd[p, 1] * Pd[p, 1] + Pd[p, 2] * Pd[p, 2])
         lk.point_coefficients_into(n, Pco[p])
 
@@ -67,7 +67,7 @@ def _load_element(e, x_el, fr_el, x, fr):
 def _interpolate_points(used, dn, Pd, Pda):
     """d = sum N_I d_I and d_,a at the used points."""
     for k in range(used.shape[0]):
-        p = used[k]
+        p = _u(used[k])
         for c in range(3):
             s = 0.0
             s0 = 0.0
@@ -81,48 +81,74 @@ def _interpolate_points(used, dn, Pd, Pda):
             Pda[p, 1, c] = s1
 
 
+@inl
+def _frame_kinematics(p, x, fr, Pd, Pco, PQ, PT, PR, PF):
+    """Q = exp(d), T(d), R = R_0 Q and f_au = R^T x_,a (rows 0, 1 of F) at point p."""
+    d0 = Pd[p, 0]
+    d1 = Pd[p, 1]
+    d2 = Pd[p, 2]
+    co = Pco[p]
+    Q = PQ[p]
+    T = PT[p]
+    R = PR[p]
+    lk.exp_co_into((d0, d1, d2), co, Q)
+    lk.tangent_co_into((d0, d1, d2), co, T)
+    for r in range(3):
+        for c in range(3):
+            R[r, c] = fr[0, r, 0] * Q[0, c] + fr[0, r, 1] * Q[1, c] + fr[0, r, 2] * Q[2, c]
+    for a in range(2):
+        xa0 = 0.0
+        xa1 = 0.0
+        xa2 = 0.0
+        for i in range(6):
+            w = _EDN[p, a, i]
+            xa0 += w * x[i, 0]
+            xa1 += w * x[i, 1]
+            xa2 += w * x[i, 2]
+        for c in range(3):
+            PF[p, a, c] = R[0, c] * xa0 + R[1, c] * xa1 + R[2, c] * xa2
+
+
+@inl
+def _bending_kinematics(p, Pd, Pda, Pco, PT, PF, PX):
+    """f_aw = T d_,a (rows 2, 3 of F) and X_a = DT(d)[.] d_,a at point p."""
+    T = PT[p]
+    for a in range(2):
+        for c in range(3):
+            PF[p, 2 + a, c] = T[c, 0] * Pda[p, a, 0] + T[c, 1] * Pda[p, a, 1] + T[c, 2] * Pda[p, a, 2]
+    d = (Pd[p, 0], Pd[p, 1], Pd[p, 2])
+    lk.d_tangent_co_into(d, (Pda[p, 0, 0], Pda[p, 0, 1], Pda[p, 0, 2]), Pco[p], PX[p, 0])
+    lk.d_tangent_co_into(d, (Pda[p, 1, 0], Pda[p, 1, 1], Pda[p, 1, 2]), Pco[p], PX[p, 1])
+
+
 @jit
-def _kinematics_points(used, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX):
+def _kinematics_points(used, at_ptr, all_points, x, fr, Pd, Pda, Pco, PQ, PT, PR, PF, PX):
     """Q = exp(d), T(d), R = R_0 Q, F = [f_ru, f_su, f_rw, f_sw], X_a = DT(d)[.] d_,a at the used points.
 
-    (X is computed also where only the strains are wanted: one compiled version serves every caller.)
+    With all_points False, f_aw and X_a only at the points whose bending strains some assumed strain reads
+    (columns 8 p + 3 .. 8 p + 5 of A, by at_ptr: the Gauss points of MITC6), zero elsewhere: enough for the
+    force and the assumed strains, which read them only through these bending strains and their weights (the
+    other points' bending weights Ps[p, 3:6] are zero). The tangent and the strain increments take all points.
+    (A run-time flag: one compiled version serves every caller; a literal would compile a second one.)
     """
     for k in range(used.shape[0]):
-        p = used[k]
-        d0 = Pd[p, 0]
-        d1 = Pd[p, 1]
-        d2 = Pd[p, 2]
-        co = Pco[p]
-        Q = PQ[p]
-        T = PT[p]
-        R = PR[p]
-        lk.exp_co_into((d0, d1, d2), co, Q)
-        lk.tangent_co_into((d0, d1, d2), co, T)
-        for r in range(3):
-            for c in range(3):
-                R[r, c] = fr[0, r, 0] * Q[0, c] + fr[0, r, 1] * Q[1, c] + fr[0, r, 2] * Q[2, c]
-        # f_au = R^T x_,a ;  f_aw = T d_,a
+        p = _u(used[k])
+        _frame_kinematics(p, x, fr, Pd, Pco, PQ, PT, PR, PF)
+        if all_points or at_ptr[8 * p + 6] > at_ptr[8 * p + 3]:
+            _bending_kinematics(p, Pd, Pda, Pco, PT, PF, PX)
+            continue
         for a in range(2):
-            xa0 = 0.0
-            xa1 = 0.0
-            xa2 = 0.0
-            for i in range(6):
-                w = _EDN[p, a, i]
-                xa0 += w * x[i, 0]
-                xa1 += w * x[i, 1]
-                xa2 += w * x[i, 2]
             for c in range(3):
-                PF[p, a, c] = R[0, c] * xa0 + R[1, c] * xa1 + R[2, c] * xa2
-                PF[p, 2 + a, c] = T[c, 0] * Pda[p, a, 0] + T[c, 1] * Pda[p, a, 1] + T[c, 2] * Pda[p, a, 2]
-        lk.d_tangent_co_into((d0, d1, d2), (Pda[p, 0, 0], Pda[p, 0, 1], Pda[p, 0, 2]), co, PX[p, 0])
-        lk.d_tangent_co_into((d0, d1, d2), (Pda[p, 1, 0], Pda[p, 1, 1], Pda[p, 1, 2]), co, PX[p, 1])
+                PF[p, 2 + a, c] = 0.0
+                for j in range(3):
+                    PX[p, a, c, j] = 0.0
 
 
 @jit
 def _strains_points(e, used, e_ref, PF, Pe):
     """Pe[p] = covariant_strains(F_p) - e_ref[e, p] (kinematics.covariant_strains)."""
     for k in range(used.shape[0]):
-        p = used[k]
+        p = _u(used[k])
         F = PF[p]
         # a . hat(e3) b = a1 b0 - a0 b1
         Pe[p, 0] = 0.5 * (F[0, 0] * F[0, 0] + F[0, 1] * F[0, 1] + F[0, 2] * F[0, 2]) - e_ref[e, p, 0]
@@ -154,7 +180,7 @@ def _strain_increments_points(e, used, fr, Ti, dh, PF, PQ, PT, PR, PX, dX, dD, d
                 acc += Ti[i, c, k] * dh[e, 6 * i + 3 + k] - Ti[i, k, c] * dh[e, 3 + k]
             dD[i, c] = acc
     for k in range(used.shape[0]):
-        p = used[k]
+        p = _u(used[k])
         F = PF[p]
         Q = PQ[p]
         T = PT[p]
@@ -337,7 +363,7 @@ def _force_points(used, PF, PQ, PT, PR, PX, Ps, g, G2, phi, fz):
     for r in range(NZ):
         fz[0, r] = 0.0
     for k in range(used.shape[0]):
-        p = used[k]
+        p = _u(used[k])
         F = PF[p]
         _strain_gradient_T(F, Ps[p], g)
         for c in range(12):
