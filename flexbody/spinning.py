@@ -113,6 +113,8 @@ class SpinningModel:
     _rows: np.ndarray = field(init=False, repr=False)       # _row_maps(), constant
     _basis: np.ndarray = field(init=False, repr=False)      # the nodes with a translation basis
     _turning: np.ndarray = field(init=False, repr=False)    # _moving() as 0/1 masses, constant
+    _centrifugal: sp.csr_matrix = field(init=False, repr=False)   # (x - c).ravel() -> the translational rows of f_c
+    _rotations: tuple = field(init=False, repr=False)       # (nodes, component, free DoF) of the director rotations
 
     def __post_init__(self) -> None:
         self.omega = finite_vector(self.omega, "the spin angular velocity")
@@ -124,6 +126,9 @@ class SpinningModel:
         self._rows = self._row_maps()
         self._basis = np.flatnonzero(m.has_basis)
         self._turning = self._moving().astype(float)
+        self._centrifugal = self._centrifugal_operator()
+        nodes, comp = np.nonzero(self._index[:, 3:5] >= 0)
+        self._rotations = (nodes, comp, self._index[nodes, 3 + comp])
 
     # -- the static-model contract of the integrators ------------------------------------------------------
     @property
@@ -177,16 +182,27 @@ class SpinningModel:
             moving[p.nodes] = True
         return moving
 
+    def _centrifugal_operator(self) -> sp.csr_matrix:
+        """The constant map (n_dof, 3n) of the positions relative to the centre, (x - c).ravel(), to the
+        translational rows of f_c: S_I^T of sum_J S_IJ m_J (|Omega|^2 I - Omega Omega^T)(x_J - c) (S the
+        translational scalar mass, m_J 1 on the turning nodes, :func:`centrifugal_forces`; S_I^T the row map,
+        E_I^T on the nodes with a translation basis), zero rows on the rotations."""
+        m, n = self.model, self.model.body.n_nodes
+        A = float(self.omega @ self.omega) * np.eye(3) - np.outer(self.omega, self.omega)
+        mass = self.dynamic.body_mass.scalar @ sp.diags(self._turning)
+        rows = sp.bsr_matrix((self._rows, np.arange(n), np.arange(n + 1)), shape=(3 * n, 3 * n))
+        nodes, comp = np.nonzero(self._index[:, :3] >= 0)
+        pick = sp.csr_matrix((np.ones(nodes.size), (self._index[nodes, comp], 3 * nodes + comp)),
+                             shape=(m.n_dof, 3 * n))
+        return (pick @ rows @ sp.kron(mass, A)).tocsr()
+
     def spin_load(self, state: ShellState) -> np.ndarray:
-        """f_c on the free DoFs (the model's row layout): centrifugal forces and director moments."""
-        bm = self.dynamic.body_mass
-        f6 = np.zeros((self.model.body.n_nodes, 6))
-        f6[:, :3] = bm.scalar @ centrifugal_forces(self._turning, state.x, self.omega, self.center)
-        idx = self._basis                                # E_I^T f_I on the nodes with a translation basis
-        if idx.size:
-            f6[idx, :3] = np.einsum("nij,nj->ni", self._rows[idx], f6[idx, :3])
-        f6[:, 3:5] = director_spin_moments(bm.rotary, state.frames, self.omega)
-        return f6.ravel()[self.model.free]
+        """f_c on the free DoFs (the model's row layout): centrifugal forces (:meth:`_centrifugal_operator`) and
+        director moments (:func:`director_spin_moments`)."""
+        f = self._centrifugal @ (state.x - self.center).ravel()
+        nodes, comp, dof = self._rotations
+        f[dof] = director_spin_moments(self.dynamic.body_mass.rotary, state.frames, self.omega)[nodes, comp]
+        return f
 
     def spin_load_tangent(self, state: ShellState) -> sp.csc_matrix:
         """d f_c / d q (free x free) along the model's increments (columns as :meth:`Model.update`)."""

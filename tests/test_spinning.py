@@ -56,6 +56,14 @@ def test_spin_tangent_against_group_finite_differences(hub):
     local = director_spin_moments(dyn.inertia.rotary, state.frames, omega)
     assert np.allclose(np.einsum("nij,nj->ni", state.frames[:, :, :2], local), expected, atol=1e-12 * np.abs(expected).max())
     assert np.abs(expected).max() > 0
+    # the translational rows: the compiled operator against the readable nodal forces, in the model's row layout
+    from flexbody.spinning import centrifugal_forces
+    f = dyn.body_mass.scalar @ centrifugal_forces(spin._turning, state.x, omega, spin.center)
+    f6 = np.zeros((dyn.model.body.n_nodes, 6))
+    f6[:, :3] = np.einsum("nij,nj->ni", spin._rows, f)
+    f6[:, 3:5] = local
+    reference = f6.ravel()[spin.model.free]
+    assert np.abs(spin.spin_load(state) - reference).max() < 1e-13 * np.abs(reference).max()
 
 
 @pytest.mark.parametrize("hub", [True, False])
