@@ -23,15 +23,23 @@ from flexbody import _numba
 from flexbody.kernel_arrays import kernel_input, kernel_output
 
 
+#: hypot(c, s) (1 for an untilted frame) below which the in-plane block of D has no drilling angle
+FLAT_BLOCK = 1e-12
+
+
 def drilling_drifts_reference(frames_ref: np.ndarray, G: np.ndarray, frames: np.ndarray) -> np.ndarray:
     """The blocks D_I^T (k, 2, 2) of the in-plane part of D_I = R_I,ref^T G_I^T R_I, each projected on a plane
     rotation (the drilling part; its O(eps^2) in-plane stretch is dropped): c = (D_11 + D_22)/2,
-    s = (D_21 - D_12)/2, normalized; D^T = [[c, s], [-s, c]]. The numpy reference of :func:`drilling_drifts`."""
+    s = (D_21 - D_12)/2, normalized; D^T = [[c, s], [-s, c]]. A frame turned over against its patch (a half
+    turn about an in-plane axis: c = s = 0, no drilling angle) gets the identity (:data:`FLAT_BLOCK`).
+    The numpy reference of :func:`drilling_drifts`."""
     D = np.swapaxes(frames_ref, 1, 2) @ np.swapaxes(G, 1, 2) @ frames
     c = 0.5 * (D[:, 0, 0] + D[:, 1, 1])
     s = 0.5 * (D[:, 1, 0] - D[:, 0, 1])
     norm = np.hypot(c, s)
-    c, s = c / norm, s / norm
+    defined = norm > FLAT_BLOCK
+    safe = np.where(defined, norm, 1.0)
+    c, s = np.where(defined, c / safe, 1.0), np.where(defined, s / safe, 0.0)
     return np.stack([np.stack([c, s], axis=1), np.stack([-s, c], axis=1)], axis=1)
 
 
@@ -63,7 +71,10 @@ def _drilling_drifts_into(frames_ref, G, frames, out):
         c = 0.5 * (_in_plane_entry(frames_ref, G, frames, n, 0, 0) + _in_plane_entry(frames_ref, G, frames, n, 1, 1))
         s = 0.5 * (_in_plane_entry(frames_ref, G, frames, n, 1, 0) - _in_plane_entry(frames_ref, G, frames, n, 0, 1))
         norm = math.hypot(c, s)
-        c, s = c / norm, s / norm
+        if norm > FLAT_BLOCK:
+            c, s = c / norm, s / norm
+        else:
+            c, s = 1.0, 0.0
         out[n, 0, 0], out[n, 0, 1], out[n, 1, 0], out[n, 1, 1] = c, s, -s, c
 
 
@@ -81,15 +92,25 @@ def apply_node_rotations_reference(vec: np.ndarray, col_index: np.ndarray, G: np
 
 def apply_node_rotations(vec: np.ndarray, col_index: np.ndarray, G: np.ndarray, rot_index: np.ndarray,
                          DT: np.ndarray, transpose: bool = False) -> np.ndarray:
-    """:func:`apply_node_rotations_reference`, compiled (the index arrays are the caller's, checked once by it:
-    int64, in range, no entry twice)."""
+    """:func:`apply_node_rotations_reference`, compiled. The index arrays are checked (shape, range); that no
+    entry appears twice is the caller's to keep (the DoF indices of distinct nodes)."""
     vec = np.ascontiguousarray(vec, dtype=float)
     if vec.ndim != 1:
         raise ValueError(f"vec must be a vector, got shape {vec.shape}")
+    col_index = _dof_index(col_index, 3, "col_index", len(vec))
+    rot_index = _dof_index(rot_index, 2, "rot_index", len(vec))
     out = vec.copy()
     _apply_node_rotations_into(vec, col_index, kernel_input(G, (3, 3), "G", rows=len(col_index)), rot_index,
                                kernel_input(DT, (2, 2), "DT", rows=len(rot_index)), bool(transpose), out)
     return out
+
+
+def _dof_index(index: np.ndarray, width: int, name: str, n: int) -> np.ndarray:
+    """``index`` as a contiguous int64 array (k, width) of entries in [0, n), or a ValueError naming it."""
+    index = kernel_input(index, (width,), name, dtype=np.int64)
+    if index.size and not (index.min() >= 0 and index.max() < n):
+        raise ValueError(f"{name} must hold DoF indices in [0, {n}), got {index.min()} .. {index.max()}")
+    return index
 
 
 @_numba.plain

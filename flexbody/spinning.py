@@ -59,11 +59,15 @@ def finite_vector(value, what: str) -> np.ndarray:
     return v
 
 
+def centrifugal_matrix(omega: np.ndarray) -> np.ndarray:
+    """A = |Omega|^2 I - Omega Omega^T (3, 3, symmetric): -Omega x (Omega x r) = A r."""
+    return float(omega @ omega) * np.eye(3) - np.outer(omega, omega)
+
+
 def centrifugal_forces(mass: np.ndarray, x: np.ndarray, omega: np.ndarray, center: np.ndarray) -> np.ndarray:
-    """Nodal centrifugal forces f_I = -m_I Omega x (Omega x (x_I - c)) = m_I (|Omega|^2 I - Omega Omega^T)(x_I - c),
+    """Nodal centrifugal forces f_I = -m_I Omega x (Omega x (x_I - c)) = m_I A (x_I - c) (:func:`centrifugal_matrix`),
     (n, 3)."""
-    A = float(omega @ omega) * np.eye(3) - np.outer(omega, omega)     # symmetric
-    return mass[:, None] * ((x - center) @ A)
+    return mass[:, None] * ((x - center) @ centrifugal_matrix(omega))
 
 
 def director_spin_moments(rotary: np.ndarray, frames: np.ndarray, omega: np.ndarray) -> np.ndarray:
@@ -111,7 +115,6 @@ class SpinningModel:
     load_factor_time: float = 0.0
     _index: np.ndarray = field(init=False, repr=False)
     _rows: np.ndarray = field(init=False, repr=False)       # _row_maps(), constant
-    _basis: np.ndarray = field(init=False, repr=False)      # the nodes with a translation basis
     _turning: np.ndarray = field(init=False, repr=False)    # _moving() as 0/1 masses, constant
     _centrifugal: sp.csr_matrix = field(init=False, repr=False)   # (x - c).ravel() -> the translational rows of f_c
     _rotations: tuple = field(init=False, repr=False)       # (nodes, component, free DoF) of the director rotations
@@ -124,7 +127,6 @@ class SpinningModel:
         index[m.free] = np.arange(m.n_dof)
         self._index = index.reshape(-1, 6)
         self._rows = self._row_maps()
-        self._basis = np.flatnonzero(m.has_basis)
         self._turning = self._moving().astype(float)
         self._centrifugal = self._centrifugal_operator()
         nodes, comp = np.nonzero(self._index[:, 3:5] >= 0)
@@ -188,7 +190,7 @@ class SpinningModel:
         translational scalar mass, m_J 1 on the turning nodes, :func:`centrifugal_forces`; S_I^T the row map,
         E_I^T on the nodes with a translation basis), zero rows on the rotations."""
         m, n = self.model, self.model.body.n_nodes
-        A = float(self.omega @ self.omega) * np.eye(3) - np.outer(self.omega, self.omega)
+        A = centrifugal_matrix(self.omega)
         mass = self.dynamic.body_mass.scalar @ sp.diags(self._turning)
         rows = sp.bsr_matrix((self._rows, np.arange(n), np.arange(n + 1)), shape=(3 * n, 3 * n))
         nodes, comp = np.nonzero(self._index[:, :3] >= 0)
@@ -207,8 +209,7 @@ class SpinningModel:
     def spin_load_tangent(self, state: ShellState) -> sp.csc_matrix:
         """d f_c / d q (free x free) along the model's increments (columns as :meth:`Model.update`)."""
         m, bm = self.model, self.dynamic.body_mass
-        w2 = float(self.omega @ self.omega)
-        A = w2 * np.eye(3) - np.outer(self.omega, self.omega)
+        A = centrifugal_matrix(self.omega)
         cols = state.frames.copy()                       # delta x_J = R_J du_J, or E_J dv_J on basis nodes
         cols[m.has_basis] = m.basis[m.has_basis]
         S = bm.scalar.tocoo()                            # blocks S_IJ E_I^T A R_J, one per entry (I, J) of S

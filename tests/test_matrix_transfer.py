@@ -49,3 +49,19 @@ def test_node_rotations_are_the_reference(transpose):
     assert np.allclose(back[col], vec[col], atol=1e-14) and np.array_equal(back[perm[50:]], vec[perm[50:]])
     with pytest.raises(ValueError, match="vec must be a vector"):
         apply_node_rotations(vec[:, None], col, G, rot, DT)
+    with pytest.raises(ValueError, match=r"col_index must hold DoF indices in \[0, 60\), got 0 .. 60"):
+        apply_node_rotations(vec, np.where(col == col.max(), 60, col), G, rot, DT)
+    with pytest.raises(ValueError, match="rot_index"):
+        apply_node_rotations(vec, col, G, rot[:, :1], DT)
+
+
+def test_a_director_turned_over_against_its_patch_gets_no_drilling_turn():
+    """A half turn about an in-plane axis (R = G R_ref exp(pi a), a in the plane) leaves c = s = 0: both paths give
+    the identity, not a division by zero (a numba ZeroDivisionError would have ended the run from inside the
+    transfer of the iteration matrix)."""
+    rng = np.random.default_rng(8)
+    R_ref, G = random_rotations(rng, 3), random_rotations(rng, 3)
+    a = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.6, -0.8, 0.0]])
+    R = G @ R_ref @ so3.exp_many(np.pi * a)
+    for drifts in (drilling_drifts, drilling_drifts_reference):
+        assert np.array_equal(drifts(R_ref, G, R), np.tile(np.eye(2), (3, 1, 1)))

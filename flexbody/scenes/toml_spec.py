@@ -475,7 +475,8 @@ def integrator_spec() -> TableSpec:
                           "`max_step` in s; docs/dynamics.md, \"Adaptive time steps\"; `contraction_floor`: the least "
                           "contraction an estimate assumes, so that no step is accepted on an optimistic first ratio, "
                           "docs/dynamics.md, \"The kept matrix follows the surface\"; `local_error_fraction`: an "
-                          "iterate is also accepted when its error is below this fraction of the step's local error estimate, 0 iterates to `rtol` and "
+                          "iterate is also accepted when its error is below this fraction of the step's local error "
+                          "estimate, 0 iterates to `rtol` and "
                           "`atol` only, docs/dynamics.md, \"Iteration error against the local error\"); integers >= 0, "
                           "`contraction_floor` and `local_error_fraction` >= 0 (0: off), every other number > 0",
                           skip=("rho_inf", "policy", "adaptive"), integers={"minimum": 0}, bound=">0",
