@@ -305,9 +305,12 @@ class Model:
         Writing the force balance in fixed directions keeps the term hat(r_u) -- the derivative of a local
         force component under a turning frame, large far from equilibrium -- out of the iteration matrix:
         Newton then takes the steps of a global-frame Newton, and still solves the same equations.
+        Without basis nodes this is the state's own frames array (read it, never write it).
         """
-        S = state.frames.copy()
         idx = np.flatnonzero(self.has_basis)
+        if idx.size == 0:
+            return state.frames
+        S = state.frames.copy()
         S[idx] = np.einsum("nji,njk->nik", self.basis[idx], state.frames[idx])
         return S
 
@@ -393,7 +396,7 @@ class Model:
         idx = np.flatnonzero(self.has_basis)
         C[idx] = np.transpose(S[idx], (0, 2, 1))
         data = np.zeros(self._indices.size)
-        scatter_blocks(Ke, S[conn], C[conn], self._slot_elem, 1.0, data)
+        scatter_blocks(Ke, np.take(S, conn, axis=0), np.take(C, conn, axis=0), self._slot_elem, 1.0, data)
         nodal = -ext_blocks
         nodal[:, :3, 3:] -= hat_many(turning[:, :3])                # the turning frame: -hat(r_u,I)
         scatter_blocks(nodal, S[:, None], C[:, None], self._slot_node, 1.0, data)

@@ -56,8 +56,9 @@ class ShellState:
         state carries them (``local``, for the nodes whose ``x`` was not written directly since)."""
         if origin is not None and not np.array_equal(origin, self.origin):
             return self.x - origin
-        stale = np.any(self.x != self.local + self.origin, axis=1)
-        if stale.any():
+        changed = self.x != self.local + self.origin
+        if changed.any():                                # rare: the row test only then
+            stale = np.any(changed, axis=1)
             self.local[stale] = self.x[stale] - self.origin
         return self.local
 
@@ -224,9 +225,10 @@ class ShellBody:
         conn = self.mesh.elements
         ref = self.reference
         section = self._section_stiffness()
-        return ElementBatch(self.relative_positions(state)[conn], state.frames[conn], ref.e_ref, ref.to_cart,
-                            ref.weights, section.matrix, self.kernel, self._element_state, section,
-                            self.material.wrinkling)
+        # np.take: the same gather as x[conn], 3-4x faster for the (m, 6) index array
+        x_el = np.take(self.relative_positions(state), conn, axis=0)
+        return ElementBatch(x_el, np.take(state.frames, conn, axis=0), ref.e_ref, ref.to_cart, ref.weights,
+                            section.matrix, self.kernel, self._element_state, section, self.material.wrinkling)
 
     def _section_stiffness(self) -> SectionStiffness:
         """The material's section stiffness, checked once (shape, symmetry, block coupling) for the kernels."""

@@ -75,10 +75,10 @@ def director_spin_moments(rotary: np.ndarray, frames: np.ndarray, omega: np.ndar
 
     In global components this is j_I (t_I . Omega) (Omega x t_I) (the inertia moment of the spinning director).
     """
-    w = omega @ frames                                # (n, 3): w_i = sum_j Omega_j R_ji
-    out = np.empty((len(w), 2))
-    out[:, 0], out[:, 1] = w[:, 1], -w[:, 0]
-    return (rotary * w[:, 2])[:, None] * out
+    w0, w1, w2 = (frames[:, :, i].dot(omega) for i in range(3))      # w_i = sum_j Omega_j R_ji
+    out = np.empty((len(frames), 2))
+    out[:, 0], out[:, 1] = w1, -w0
+    return (rotary * w2)[:, None] * out
 
 
 def director_spin_moment_tangent(rotary: np.ndarray, frames: np.ndarray, omega: np.ndarray) -> np.ndarray:

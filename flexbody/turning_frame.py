@@ -189,7 +189,7 @@ class TurningFrameModel:
         """2 j_I (t_I . Omega) at the rotational DoFs' nodes (the Coriolis coefficient of the directors)."""
         d = self.dynamic
         nodes = d.node[self._rot]
-        return 2.0 * d.body_mass.rotary[nodes] * (state.frames[nodes, :, 2] @ self.frame.omega)
+        return 2.0 * d.body_mass.rotary[nodes] * state.frames[:, :, 2].dot(self.frame.omega)[nodes]
 
     def coriolis_force(self, state: ShellState, v: np.ndarray) -> np.ndarray:
         """G(q) v: 2 S Omega x ydot on the translations, 2 j (t . Omega)(-w_2, w_1) on the director rotations."""
@@ -286,17 +286,17 @@ class TurningFrameModel:
         + Omega x (Omega x (y - c))), angular acceleration R_in (wdot_r - w_r x Omega_l) (each of
         ``accelerations``: vdot, or the pseudo-acceleration taken as one)."""
         d, om, c = self.dynamic, self.frame.omega, self.frame.center
-        Q = self.frame.rotation(t)
+        Q, W = self.frame.rotation(t), so3.hat(om).T        # Omega x y_I = (y @ W)_I: one product for all nodes
         inertial = self.inertial_state(state, t)
         r = state.x - c
         ydot, w_r = d.nodal_velocities(state, v)
         om_l = np.einsum("nji,j->ni", state.frames, om)
-        xdot = (ydot + np.cross(om, r)) @ Q.T
+        xdot = (ydot + r @ W) @ Q.T
         omega = np.einsum("nij,nj->ni", inertial.frames, w_r) + om
         out = []
         for acc in accelerations:
             yddot, wdot_r = d.nodal_velocities(state, acc)
-            xddot = (yddot + 2.0 * np.cross(om, ydot) + np.cross(om, np.cross(om, r))) @ Q.T
+            xddot = (yddot + 2.0 * (ydot @ W) + (r @ W) @ W) @ Q.T
             alpha = np.einsum("nij,nj->ni", inertial.frames, wdot_r - np.cross(w_r, om_l))
             out.append(d.velocity_from_nodal(inertial, xddot, alpha))
         return inertial, d.velocity_from_nodal(inertial, xdot, omega), out
@@ -305,7 +305,7 @@ class TurningFrameModel:
         """The inverse of :meth:`inertial_motion`: an inertial (state, v, accelerations) at time t in the frame
         (a restart of a turning-frame run from its inertial files)."""
         d, om, c = self.dynamic, self.frame.omega, self.frame.center
-        Q = self.frame.rotation(t)
+        Q, W = self.frame.rotation(t), so3.hat(om).T        # Omega x y_I = (y @ W)_I, as in inertial_motion
         local = (state.relative_positions() + state.origin - c) @ Q + (c - state.origin)
         turning = ShellState(local + state.origin, np.einsum("ji,njk->nik", Q, state.frames),
                              None if state.stress is None else state.stress.copy(), local, state.origin)
@@ -314,11 +314,11 @@ class TurningFrameModel:
         om_l = np.einsum("nji,j->ni", turning.frames, om)
         w_r = w - om_l
         w_r[:, 2] = 0.0
-        ydot = xdot @ Q - np.cross(om, r)
+        ydot = xdot @ Q - r @ W
         out = []
         for acc in accelerations:
             xddot, alpha = d.nodal_velocities(state, acc)
-            yddot = xddot @ Q - 2.0 * np.cross(om, ydot) - np.cross(om, np.cross(om, r))
+            yddot = xddot @ Q - 2.0 * (ydot @ W) - (r @ W) @ W
             wdot_r = alpha + np.cross(w_r, om_l)
             out.append(d.velocity_from_nodal(turning, yddot, np.einsum("nij,nj->ni", turning.frames, wdot_r)))
         return turning, d.velocity_from_nodal(turning, ydot, np.einsum("nij,nj->ni", turning.frames, w_r)), out

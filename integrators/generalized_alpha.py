@@ -316,8 +316,15 @@ class StepTaken(StepSolution):
 
 def weighted_rms(dx: np.ndarray, x: np.ndarray, scale, settings: AlphaSettings, extra=0.0) -> float:
     """sqrt(mean((dx_i / (atol s_i + rtol |x_i| + extra_i))^2))."""
-    w = settings.atol * scale + settings.rtol * np.abs(x) + extra
-    return float(np.sqrt(np.mean((dx / w) ** 2))) if dx.size else 0.0
+    if not dx.size:
+        return 0.0
+    w = np.abs(x)                 # in place: the same operations in the same order, without temporaries
+    w *= settings.rtol
+    w += settings.atol * scale
+    w += extra
+    q = np.divide(dx, w, out=w)
+    q *= q
+    return float(np.sqrt(np.mean(q)))
 
 
 def _predict(q_n, v_n, vdot_n, a_n, h: float, p: AlphaParameters, update: Callable) -> _Step:
