@@ -97,3 +97,27 @@ class OutputSteps:
             self.steps.append(step)
             if self.then is not None:
                 self.then(step)
+
+
+class LaggingIterationMatrix(Oscillator):
+    """The oscillator M x'' + K x = 0 whose ``residual_and_tangent`` returns, instead of K, a tangent whose
+    iteration matrix S_B = M beta' + K_B is off by a cross-coupling of its two DoFs: the modified-Newton error
+    map e -> (I - S_B^-1 S) e is G = [[0, a], [b, 0]] (S = M beta' + K the exact one, for the step h and rho_inf).
+
+    With a >> b the corrections alternate between contracting by about b and by about a: a single ratio of two
+    corrections exceeds a refresh ratio below a while the iteration converges at sqrt(a b) per iteration, as the
+    kept iteration matrix of a thin shell does (translation errors that the directors follow one iteration later;
+    integrators/generalized_alpha.py, "Transient ratios of a kept matrix"). The residual is exact: the fixed point
+    is the oscillator's. A fresh matrix is no better than a kept one: the coupling is in every tangent.
+    """
+
+    def __init__(self, omegas, h, rho_inf, a, b):
+        from integrators.generalized_alpha import AlphaParameters
+        super().__init__(omegas)
+        self.beta_prime = AlphaParameters.from_rho_inf(rho_inf).beta_prime(h)
+        S = np.diag(self.mass * self.beta_prime + self.omegas**2)
+        G = np.array([[0.0, a], [b, 0.0]])
+        self.tangent = S @ np.linalg.inv(np.eye(2) - G) - np.diag(self.mass * self.beta_prime)
+
+    def residual_and_tangent(self, q, v, vdot, t):
+        return self.residual(q, v, vdot, t), sp.csc_matrix(self.tangent)
