@@ -519,7 +519,6 @@ class GeneralizedAlpha:
                       f"{[f'{c:.2e}' for c in corrections]})")
 
 
-
 def _contraction(theta: float, kept: list[float], refresh_ratio: float) -> tuple[float, bool]:
     """The contraction estimate of the error test and whether to refresh the matrix (module docstring, "Transient
     ratios of a kept matrix").
