@@ -4,11 +4,13 @@
                                              [--thickness 1e-3,1e-6] [--mass consistent] [--out FILE]
                                              [--steps N] [--every K] [--rho-inf R] [--frame F]
                                              [--adaptive [--tolerance T] | --fixed] [--integrator KEY=VALUE ...]
-                                             [--wrinkling]
+                                             [--wrinkling] [--repeat K]
 
 ``--steps``, ``--every``, ``--rho-inf``, ``--frame``, ``--adaptive``, ``--fixed``, ``--integrator`` and
 ``--wrinkling`` leave the defaults (100 steps per revolution, a record every 10 steps, the scene's rho_inf, frame
 and time stepping: fixed for the annuli, error-controlled for the sail, the linear membrane law) for studies; the acceptance rows use none (``--wrinkling``: the tension-field membrane law, docs/theory.md).
+``--repeat K`` runs each case K times and prints the CPU column as "median (min-max)": on a shared machine the
+same run varies by a third from one minute to the next (the other columns are the same in every run).
 
 Cases (all start on the steady spin, ``[analysis.initial] state = "steady_spin"``, at default settings):
 
@@ -136,18 +138,27 @@ def compressive_fraction(body, state) -> float:
     return float(np.mean(smallest < -1e-9 * np.abs(largest).max()))
 
 
-def _run(label: str, build, omega: float | None, compression: bool = False) -> str:
-    """One row: ``build()`` makes the scene."""
-    try:
-        scene = build()
-    except Exception as exc:  # a bad case is reported in its row, the study goes on
-        return f"| {label} | - | - | - | - | - | - | build failed: {exc} |"
-    t0 = time.process_time()
-    try:
-        summary = run_scene(scene)
-    except (ValueError, ArithmeticError, RuntimeError) as exc:
-        return f"| {label} | {scene.model.n_dof} | - | - | - | - | - | failed: {str(exc)[:120]} |"
-    cpu = time.process_time() - t0 - getattr(summary, "compile_time_s", 0.0)
+def _cpu_column(seconds: list[float]) -> str:
+    """One run's CPU seconds, or the median (min-max) of several."""
+    if len(seconds) == 1:
+        return f"{seconds[0]:.1f}"
+    return f"{float(np.median(seconds)):.1f} ({min(seconds):.1f}-{max(seconds):.1f})"
+
+
+def _run(label: str, build, omega: float | None, compression: bool = False, repeat: int = 1) -> str:
+    """One row: ``build()`` makes the scene; run ``repeat`` times (the CPU column: :func:`_cpu_column`)."""
+    seconds = []
+    for _ in range(repeat):
+        try:
+            scene = build()
+        except Exception as exc:  # a bad case is reported in its row, the study goes on
+            return f"| {label} | - | - | - | - | - | - | build failed: {exc} |"
+        t0 = time.process_time()
+        try:
+            summary = run_scene(scene)
+        except (ValueError, ArithmeticError, RuntimeError) as exc:
+            return f"| {label} | {scene.model.n_dof} | - | - | - | - | - | failed: {str(exc)[:120]} |"
+        seconds.append(time.process_time() - t0 - getattr(summary, "compile_time_s", 0.0))
     res = summary.result
     steps = res.steps or 1
     rejected = (f"; {res.rejected_error} + {res.rejected_newton} steps rejected, h {res.min_step:.2e} to "
@@ -157,7 +168,7 @@ def _run(label: str, build, omega: float | None, compression: bool = False) -> s
     if compression:
         state += f"; compressive Gauss points at the end {100 * compressive_fraction(scene.model.body, res.state):.0f} %"
     return (f"| {label} | {scene.model.n_dof} | {steps} | {res.stats.iterations / steps:.2f} | "
-            f"{res.stats.factorizations / steps:.3f} | {cpu:.1f} | {rim_frequency(summary):.2f} | "
+            f"{res.stats.factorizations / steps:.3f} | {_cpu_column(seconds)} | {rim_frequency(summary):.2f} | "
             f"{state}; {what} drift {drift:.1e}{rejected} |")
 
 
@@ -179,8 +190,11 @@ def main() -> None:
     parser.add_argument("--wrinkling", action="store_true", help="the tension-field membrane law ([material])")
     parser.add_argument("--integrator", action="append", default=[], metavar="KEY=VALUE",
                         help="an [analysis.integrator] setting (e.g. atol=1e-8), repeatable")
+    parser.add_argument("--repeat", type=int, default=1, help="runs per case (CPU: median and range)")
     parser.add_argument("--out", default=None)
     args = parser.parse_args()
+    if args.repeat < 1:
+        parser.error(f"--repeat must be >= 1, got {args.repeat}")
     period = 2 * math.pi / OMEGA
     dt, end = period / args.steps, args.revolutions * period
     options = "" if args.rho_inf is None else f"rho_inf = {args.rho_inf}\n"
@@ -202,14 +216,16 @@ def main() -> None:
                     text = ANNULUS.format(name="hub", a=0.2, nr=nr, nc=8 * nr, h=h, dt=dt, end=end, omega=OMEGA,
                                           mass=args.mass, **extra)
                     text += HUB.format(a=0.2, omega=OMEGA)
-                    rows.append(_run(f"hub annulus {nr}x{8 * nr}, h/R {h:g}", lambda t=text: _scene(t), OMEGA))
+                    rows.append(_run(f"hub annulus {nr}x{8 * nr}, h/R {h:g}", lambda t=text: _scene(t), OMEGA,
+                                     repeat=args.repeat))
                     print(rows[-1], flush=True)
         elif case == "free":
             for a in (0.1, 0.5):
                 nr = cells[0]
                 text = ANNULUS.format(name="free", a=a, nr=nr, nc=8 * nr, h=1e-3, dt=dt, end=end, omega=OMEGA,
                                       mass=args.mass, **extra)
-                rows.append(_run(f"free annulus a/b {a}, {nr}x{8 * nr}", lambda t=text: _scene(t), None))
+                rows.append(_run(f"free annulus a/b {a}, {nr}x{8 * nr}", lambda t=text: _scene(t), None,
+                                 repeat=args.repeat))
                 print(rows[-1], flush=True)
         elif case == "sail":                                   # examples/solar_sail_10m.toml, 2 rpm
             sail_period = 60.0 / 2
@@ -227,7 +243,8 @@ def main() -> None:
                 key, value = item.split("=", 1)
                 overrides[f"analysis.integrator.{key.strip()}"] = tomllib.loads(f"v = {value}")["v"]
             rows.append(_run("10 m hexagonal sail, 4 rings, 2 rpm, 2 mN rim pulse",
-                             lambda: load_toml_scene(SAIL, overrides), 2 * 2 * math.pi / 60, compression=True))
+                             lambda: load_toml_scene(SAIL, overrides), 2 * 2 * math.pi / 60, compression=True,
+                             repeat=args.repeat))
             print(rows[-1], flush=True)
         else:
             raise SystemExit(f"unknown case {case!r}: hub, free or sail")
