@@ -46,7 +46,7 @@ import scipy.sparse as sp
 from flexbody.body import ShellState
 from flexbody.dynamics import DynamicModel
 from flexbody.lie import so3
-from flexbody.spinning import SpinningModel, finite_vector
+from flexbody.spinning import SpinningModel, centrifugal_matrix, finite_vector
 
 
 @dataclass(frozen=True)
@@ -287,6 +287,7 @@ class TurningFrameModel:
         ``accelerations``: vdot, or the pseudo-acceleration taken as one)."""
         d, om, c = self.dynamic, self.frame.omega, self.frame.center
         Q, W = self.frame.rotation(t), so3.hat(om).T        # Omega x y_I = (y @ W)_I: one product for all nodes
+        A = centrifugal_matrix(om)                          # Omega x (Omega x y_I) = -(y @ A)_I (A symmetric)
         inertial = self.inertial_state(state, t)
         r = state.x - c
         ydot, w_r = d.nodal_velocities(state, v)
@@ -296,7 +297,7 @@ class TurningFrameModel:
         out = []
         for acc in accelerations:
             yddot, wdot_r = d.nodal_velocities(state, acc)
-            xddot = (yddot + 2.0 * (ydot @ W) + (r @ W) @ W) @ Q.T
+            xddot = (yddot + 2.0 * (ydot @ W) - r @ A) @ Q.T
             alpha = np.einsum("nij,nj->ni", inertial.frames, wdot_r - np.cross(w_r, om_l))
             out.append(d.velocity_from_nodal(inertial, xddot, alpha))
         return inertial, d.velocity_from_nodal(inertial, xdot, omega), out
@@ -306,6 +307,7 @@ class TurningFrameModel:
         (a restart of a turning-frame run from its inertial files)."""
         d, om, c = self.dynamic, self.frame.omega, self.frame.center
         Q, W = self.frame.rotation(t), so3.hat(om).T        # Omega x y_I = (y @ W)_I, as in inertial_motion
+        A = centrifugal_matrix(om)
         local = (state.relative_positions() + state.origin - c) @ Q + (c - state.origin)
         turning = ShellState(local + state.origin, np.einsum("ji,njk->nik", Q, state.frames),
                              None if state.stress is None else state.stress.copy(), local, state.origin)
@@ -318,7 +320,7 @@ class TurningFrameModel:
         out = []
         for acc in accelerations:
             xddot, alpha = d.nodal_velocities(state, acc)
-            yddot = xddot @ Q - 2.0 * (ydot @ W) - (r @ W) @ W
+            yddot = xddot @ Q - 2.0 * (ydot @ W) + r @ A
             wdot_r = alpha + np.cross(w_r, om_l)
             out.append(d.velocity_from_nodal(turning, yddot, np.einsum("nij,nj->ni", turning.frames, wdot_r)))
         return turning, d.velocity_from_nodal(turning, ydot, np.einsum("nij,nj->ni", turning.frames, w_r)), out

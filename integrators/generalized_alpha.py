@@ -67,11 +67,11 @@ what the transient left is not assumed to contract faster than it did. Measured 
 docs/dynamics.md at h/R 1e-6 (4 x 32 cells, the turning frame), at the steps that refreshed: corrections like
 1e5, 5e2, 4e2 (ratios 0.005, 0.7), the third concentrated on director rotations. The kept, transferred matrix M_B
 was not stalling: at four such steps the spectral radius of its error map I - M_B^-1 S (S the fresh matrix) was
-0.04-0.28, and the next kept correction would have been 10-40 times smaller than the third (within 2x of a
-fresh Newton correction). The map is far from normal in the weighted norm: translation errors, which it resolves
+0.04-0.28, and the next kept correction would have been 26-121 times smaller than the third (within 2x of a
+fresh Newton correction: 7.5 against 4.2, 12.4 against 7.6). The map is far from normal in the weighted norm: translation errors, which it resolves
 well, feed the director rotations that follow them (block norm ~1e3, rotation on rotation 0.02-0.25, its
 eigenvalues in +- pairs), so the ratios alternate (0.015, 0.67, 0.016, 0.41, 0.03, ...) around sqrt(0.016 x 0.67)
-~ 0.1. Refreshing at such a ratio bought a factorization and one iteration less. Runs, 100 steps per revolution,
+~ 0.1. Refreshing at such a ratio paid a factorization for a next correction at most 2x smaller. Runs, 100 steps per revolution,
 unchanged -> now: the hub annulus at h/R 1e-6 over 20 revolutions 66 -> 1 factorizations, 2.27 -> 2.23 iterations
 per step, Jacobi drift 6.4e-8 -> 8.5e-8 (tightly converged: 1.2e-7), rim frequency 18.561972 -> 18.561976
 (tight 18.561979), the largest position difference from the tight run 1.4e-5 -> 7.6e-6 m; at h/R 1e-3 over 4

@@ -105,6 +105,12 @@ def test_the_maps_between_the_frames_invert_each_other():
     assert np.allclose(tm.relative_velocity(q0, v0), v, rtol=0, atol=1e-10)
     rot = TurningFrame(omega, np.zeros(3)).rotation(0.3)
     assert np.allclose(rot @ rot.T, np.eye(3), atol=1e-15) and np.allclose(rot @ omega, omega)
+    # at rest in the frame, every node's inertial acceleration is the centripetal Omega x (Omega x (x - c))
+    q1, _, (a1,) = tm.inertial_motion(state, np.zeros(tm.n_dof), (np.zeros(tm.n_dof),), 0.0)
+    xddot = dyn.nodal_velocities(q1, a1)[0]
+    centripetal = np.cross(omega, np.cross(omega, q1.x - tm.frame.center))
+    moving = np.flatnonzero(np.abs(centripetal).max(axis=1) > 0)
+    assert np.abs(xddot[moving] - centripetal[moving]).max() < 1e-12 * np.abs(centripetal).max()
 
 
 ANNULUS = """

@@ -417,7 +417,7 @@ def test_a_transient_ratio_of_a_kept_matrix_does_not_refresh_it():
     ratios = np.array(log.steps[1].corrections[1:]) / np.array(log.steps[1].corrections[:-1])
     assert ratios[1] > 0.3 > np.sqrt(ratios[0] * ratios[1])          # the transient the test is about
     assert run.stats.factorizations == 1 and run.stats.iterations <= 5 * run.steps
-    assert np.abs(run.state - tight.state).max() < 3e-8
+    assert np.abs(run.state - tight.state).max() < 3e-7 * np.abs(x0).max()
 
 
 def test_contraction_refreshes_on_slow_pairs_and_keeps_the_transient_in_the_error_estimate():
